@@ -1,0 +1,50 @@
+#include "tests/testing_support.hpp"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <cstdio>
+#include <random>
+
+namespace shadowtiles::testing {
+
+std::filesystem::path shared_scene(const std::string& relative) {
+  return std::filesystem::path(SHADOWTILES_SOURCE_DIR) / ".." / "shared" / "scenes" / relative;
+}
+
+std::filesystem::path assimp_model(const std::string& relative) {
+  return std::filesystem::path("/usr/share/assimp/models") / relative;
+}
+
+std::filesystem::path cli_path() { return SHADOWTILES_CLI; }
+
+TempDir::TempDir() {
+  static std::atomic<int> counter{0};
+  std::random_device random;
+  path_ = std::filesystem::temp_directory_path() /
+          ("shadowtiles-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + "-" +
+           std::to_string(random()));
+  std::filesystem::create_directories(path_);
+}
+
+TempDir::~TempDir() {
+  std::error_code ignored;
+  std::filesystem::remove_all(path_, ignored);
+}
+
+int run_command(const std::string& command, std::string* output) {
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return -1;
+  std::array<char, 4096> buffer;
+  size_t n;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    if (output) output->append(buffer.data(), n);
+  int status = ::pclose(pipe);
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
+  return -1;
+}
+
+}  // namespace shadowtiles::testing

@@ -1,0 +1,30 @@
+// Helpers shared by the test executables: where the shared scenes and the CLI are, temp dirs.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace shadowtiles::testing {
+
+// ../shared/scenes/<relative> next to the repository (as CI lays it out).
+std::filesystem::path shared_scene(const std::string& relative);
+// A Debian assimp-testmodels file: /usr/share/assimp/models/<relative>.
+std::filesystem::path assimp_model(const std::string& relative);
+// The built `shadowtiles` executable.
+std::filesystem::path cli_path();
+// A fresh, empty directory under the system temp dir, removed by the destructor.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+// Runs a shell command, returns its exit status (as from waitpid, decoded) and captures stdout+stderr.
+int run_command(const std::string& command, std::string* output = nullptr);
+
+}  // namespace shadowtiles::testing
