@@ -1,2 +1,28 @@
-// shadowtiles: one CLI for build, query, inspect, serve (commands are added in cli/command_*.cpp).
-int main() { return 0; }
+// shadowtiles: one CLI for the whole product (build, query, inspect, ...). Exit codes: cli/exit_codes.hpp.
+#include <spdlog/spdlog.h>
+
+#include "cli/commands.hpp"
+#include "cli/exit_codes.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"shadowtiles: lossless compressed shadow maps of huge static worlds"};
+  app.require_subcommand(1);
+  app.fallthrough();  // -v/-q work after the command name too
+  bool verbose = false, quiet = false;
+  app.add_flag("-v,--verbose", verbose, "Debug logging");
+  app.add_flag("-q,--quiet", quiet, "Warnings and errors only");
+  int exit_code = shadowtiles::cli::kOk;
+  shadowtiles::cli::add_build_command(app, exit_code);
+  shadowtiles::cli::add_query_command(app, exit_code);
+  shadowtiles::cli::add_inspect_command(app, exit_code);
+  app.parse_complete_callback([&] {
+    spdlog::set_level(verbose ? spdlog::level::debug : quiet ? spdlog::level::warn : spdlog::level::info);
+  });
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    int code = app.exit(e);
+    return code == 0 ? shadowtiles::cli::kOk : shadowtiles::cli::kInvalidInput;
+  }
+  return exit_code;
+}

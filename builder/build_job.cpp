@@ -1,0 +1,338 @@
+#include "builder/build_job.hpp"
+
+#include <sys/resource.h>
+#include <xxhash.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include <spdlog/spdlog.h>
+
+#include "builder/builder_version.hpp"
+#include "builder/dual_depth_renderer.hpp"
+#include "builder/file_hash.hpp"
+#include "builder/light_space_scene.hpp"
+#include "builder/tile_encoder.hpp"
+#include "client/store_meta.hpp"
+#include "store/blob.hpp"
+#include "store/lmdb_store.hpp"
+#include "store/tile_key.hpp"
+
+namespace shadowtiles {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+std::string hex64(uint64_t value) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(value));
+  return text;
+}
+
+std::vector<uint8_t> progress_key(TileCoord tile) {
+  std::vector<uint8_t> key(8);
+  for (int i = 0; i < 4; ++i) {
+    key[i] = uint8_t(tile.x >> (24 - 8 * i));
+    key[4 + i] = uint8_t(tile.y >> (24 - 8 * i));
+  }
+  return key;
+}
+
+TileCoord progress_tile(std::span<const uint8_t> key) {
+  TileCoord tile;
+  for (int i = 0; i < 4; ++i) {
+    tile.x = (tile.x << 8) | key[i];
+    tile.y = (tile.y << 8) | key[4 + i];
+  }
+  return tile;
+}
+
+std::vector<uint8_t> bytes_of(std::string_view text) { return {text.begin(), text.end()}; }
+
+double peak_memory_mib() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_maxrss) / 1024.0;
+}
+
+Status validate(const BuildConfig& config) {
+  if (config.threads < 1 || config.threads > 256)
+    return make_error(ErrorCode::invalid_input, "threads must be in [1, 256]");
+  if (config.methods.empty()) return make_error(ErrorCode::invalid_input, "no method requested");
+  for (store::Method method : config.methods)
+    if (!builder_supports(method))
+      return make_error(ErrorCode::unsupported,
+                        std::string("method '") + store::method_name(method) + "' is not implemented yet");
+  if (config.resolution.has_value() == config.texel_size.has_value())
+    return make_error(ErrorCode::invalid_input, "give exactly one of resolution and texel size");
+  if (!(config.bias_texels >= 0) || !(config.exit_margin_texels >= config.bias_texels))
+    return make_error(ErrorCode::invalid_input, "need 0 <= bias <= exit margin (in texels)");
+  if (config.store_path.empty()) return make_error(ErrorCode::invalid_input, "no output store given");
+  return {};
+}
+
+// Everything that defines the stored bytes: a store built from a different identity is not resumed.
+nlohmann::json build_identity(const BuildConfig& config, uint64_t scene_hash, uint32_t resolution,
+                              uint32_t tile_size) {
+  nlohmann::json methods = nlohmann::json::array();
+  for (store::Method m : config.methods) methods.push_back(store::method_name(m));
+  return {{"builder", builder_version()},
+          {"store_format", kStoreFormatVersion},
+          {"scene_xxh64", hex64(scene_hash)},
+          {"light", {config.light_direction[0], config.light_direction[1], config.light_direction[2]}},
+          {"resolution", resolution},
+          {"tile_size", tile_size},
+          {"methods", methods},
+          {"heightfield", config.load.heightfield_meshes},
+          {"bias_texels", config.bias_texels},
+          {"exit_margin_texels", config.exit_margin_texels},
+          {"zstd_level", config.zstd_level}};
+}
+
+struct WorkerTotals {
+  DualDepthStats depth;
+  double encode_seconds = 0;
+  double store_seconds = 0;
+  uint64_t stored_tiles = 0;
+  uint64_t blob_bytes = 0;
+  std::map<std::string, uint64_t> bytes_by_method;
+  std::map<std::string, uint64_t> raw_bytes_by_method;
+};
+
+}  // namespace
+
+Result<BuildSummary> run_build(const BuildConfig& config) {
+  auto total_start = Clock::now();
+  if (Status status = validate(config); !status) return status.error();
+
+  // Load.
+  LoadStats load_stats;
+  auto scene = load_scene(config.scene_path, config.load, &load_stats);
+  if (!scene) return scene.error();
+
+  uint32_t resolution = 0;
+  if (config.resolution) {
+    resolution = *config.resolution;
+  } else {
+    auto fitted = LightFrame::resolution_for_texel_size(config.light_direction, scene->bounds, *config.texel_size);
+    if (!fitted) return fitted.error();
+    resolution = *fitted;
+  }
+  auto frame = LightFrame::fit(config.light_direction, scene->bounds, resolution);
+  if (!frame) return frame.error();
+  auto layout = TileLayout::make(resolution, config.tile_size);
+  if (!layout) return layout.error();
+  spdlog::info("light frame: {}^2 texels of {:.6g} world units, {}^2 tiles of {}^2, depth range {:.6g}",
+               resolution, frame->texel_size(), layout->tiles_per_side(), layout->tile_size(), frame->depth_range());
+
+  auto scene_hash = hash_file(config.scene_path);
+  if (!scene_hash) return scene_hash.error();
+  std::string config_hash =
+      hex64(XXH64(build_identity(config, *scene_hash, resolution, layout->tile_size()).dump().data(),
+                  build_identity(config, *scene_hash, resolution, layout->tile_size()).dump().size(), 0));
+
+  // Store: refuse to mix builds; resume the same one.
+  store::Store::Options store_options;
+  store_options.mode = store::Store::Mode::read_write;
+  store_options.initial_map_size = config.initial_map_size;
+  store_options.no_sync = true;  // one forced sync at the end (DESIGN.md §9)
+  auto opened = store::Store::open(config.store_path, store_options);
+  if (!opened) return opened.error();
+  store::Store& db = **opened;
+  auto existing = db.get(store::Database::meta, store::as_bytes(kMetaBuildKey));
+  if (!existing) return existing.error();
+  if (existing->has_value()) {
+    auto old_meta = StoreMeta::parse(std::string_view(reinterpret_cast<const char*>((*existing)->data()),
+                                                      (*existing)->size()));
+    bool same = old_meta && old_meta->config_hash == config_hash;
+    if (!same) {
+      if (!config.overwrite)
+        return make_error(ErrorCode::invalid_input,
+                          "store " + config.store_path.string() +
+                              " holds a different build; pass --overwrite or choose another --out");
+      spdlog::warn("overwriting the build in {}", config.store_path.string());
+      for (auto which : {store::Database::meta, store::Database::tiles, store::Database::top,
+                         store::Database::progress})
+        if (Status s = db.clear(which); !s) return s.error();
+    }
+  }
+
+  StoreMeta meta;
+  meta.builder_version = builder_version();
+  meta.config_hash = config_hash;
+  meta.scene_path = config.scene_path.string();
+  meta.scene_triangles = scene->triangle_count();
+  meta.scene_bounds = scene->bounds;
+  meta.light_direction = frame->direction();
+  meta.light_origin = frame->origin();
+  meta.light_extent = frame->extent();
+  meta.light_depth_range = frame->depth_range();
+  meta.resolution = resolution;
+  meta.tile_size = layout->tile_size();
+  meta.methods = config.methods;
+  meta.default_bias = config.bias_texels * frame->texel_size();
+  meta.exit_margin = config.exit_margin_texels * frame->texel_size();
+
+  // Index: which tiles have triangles; which are done already.
+  auto index_start = Clock::now();
+  LightSpaceScene light_scene(*scene, *frame, *layout);
+  std::set<TileCoord> done;
+  if (Status s = db.for_each(store::Database::progress, {},
+                             [&](std::span<const uint8_t> key, std::span<const uint8_t>) {
+                               if (key.size() == 8) done.insert(progress_tile(key));
+                               return true;
+                             });
+      !s)
+    return s.error();
+  std::vector<TileCoord> todo;
+  uint64_t candidates = 0;
+  for (uint64_t i = 0; i < layout->tile_count(); ++i) {
+    TileCoord tile = TileLayout::from_morton_index(i);
+    if (light_scene.triangles_of(tile).empty()) continue;
+    ++candidates;
+    if (!done.count(tile)) todo.push_back(tile);
+  }
+  double index_seconds = seconds_since(index_start);
+  spdlog::info("{} of {} tiles have triangles ({} triangle references); {} already committed, {} to render",
+               candidates, layout->tile_count(), light_scene.triangle_references(), candidates - todo.size(),
+               todo.size());
+
+  if (!existing->has_value() || !todo.empty() || !done.empty()) {
+    std::string text = meta.to_json().dump();
+    std::vector<store::Store::Put> puts{{store::Database::meta, bytes_of(kMetaBuildKey), bytes_of(text)}};
+    if (Status s = db.write(puts); !s) return s.error();
+  }
+
+  auto device = EmbreeDevice::create();
+  if (!device) return device.error();
+  DualDepthOptions depth_options;
+  depth_options.exit_margin = float(frame->depth_from_world(meta.exit_margin));
+  DualDepthRenderer renderer(*device, light_scene, depth_options);
+
+  // Workers: render, encode, commit, one tile at a time each.
+  auto render_start = Clock::now();
+  std::atomic<size_t> next{0};
+  std::atomic<uint64_t> committed{0};
+  std::atomic<uint64_t> rays_done{0};
+  std::atomic<bool> failed{false};
+  std::mutex totals_mutex;
+  WorkerTotals totals;
+  std::optional<Error> first_error;
+  auto fail = [&](Error error) {
+    std::lock_guard lock(totals_mutex);
+    if (!first_error) first_error = std::move(error);
+    failed = true;
+  };
+  auto worker = [&] {
+    WorkerTotals mine;
+    while (!failed) {
+      size_t i = next++;
+      if (i >= todo.size()) break;
+      TileCoord tile = todo[i];
+      DualDepthStats depth;
+      auto intervals = renderer.render(tile, &depth);
+      if (!intervals) { fail(intervals.error()); break; }
+      mine.depth.add(depth);
+      rays_done += depth.rays;
+
+      auto encode_start = Clock::now();
+      std::vector<store::Store::Put> puts;
+      bool empty = intervals->all_missed();
+      if (!empty) {
+        for (store::Method method : config.methods) {
+          auto payload = encode_tile_payload(method, *intervals);
+          if (!payload) { fail(payload.error()); return; }
+          auto blob = store::encode_blob(method, *payload, 0, config.zstd_level);
+          mine.blob_bytes += blob.size();
+          mine.bytes_by_method[store::method_name(method)] += blob.size();
+          mine.raw_bytes_by_method[store::method_name(method)] += payload->size();
+          auto key = store::encode_tile_key({method, layout->tile_level(), tile.x, tile.y});
+          puts.push_back({store::Database::tiles, {key.begin(), key.end()}, std::move(blob)});
+        }
+        ++mine.stored_tiles;
+      }
+      puts.push_back({store::Database::progress, progress_key(tile), {uint8_t(empty ? 0 : 1)}});
+      mine.encode_seconds += seconds_since(encode_start);
+
+      auto store_start = Clock::now();
+      if (Status s = db.write(puts); !s) { fail(s.error()); break; }
+      mine.store_seconds += seconds_since(store_start);
+      uint64_t count = ++committed;
+      if (config.debug_kill_after_tiles && count >= config.debug_kill_after_tiles) std::raise(SIGKILL);
+    }
+    std::lock_guard lock(totals_mutex);
+    totals.depth.add(mine.depth);
+    totals.encode_seconds += mine.encode_seconds;
+    totals.store_seconds += mine.store_seconds;
+    totals.stored_tiles += mine.stored_tiles;
+    totals.blob_bytes += mine.blob_bytes;
+    for (auto& [k, v] : mine.bytes_by_method) totals.bytes_by_method[k] += v;
+    for (auto& [k, v] : mine.raw_bytes_by_method) totals.raw_bytes_by_method[k] += v;
+  };
+  std::vector<std::thread> threads;
+  unsigned thread_count = std::min<unsigned>(config.threads, std::max<size_t>(todo.size(), 1));
+  for (unsigned t = 0; t < thread_count; ++t) threads.emplace_back(worker);
+
+  // Progress line about once a second while the workers run.
+  auto last_report = Clock::now();
+  while (committed < todo.size() && !failed) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (config.on_progress && seconds_since(last_report) >= 1.0) {
+      last_report = Clock::now();
+      double elapsed = seconds_since(render_start);
+      uint64_t n = committed;
+      double rate = elapsed > 0 ? double(rays_done) / elapsed : 0;
+      double eta = n ? elapsed / double(n) * double(todo.size() - n) : 0;
+      char line[160];
+      std::snprintf(line, sizeof line, "tiles %llu/%zu  %.2f Mrays/s  ETA %.0f s",
+                    static_cast<unsigned long long>(n), todo.size(), rate / 1e6, eta);
+      config.on_progress(line);
+    }
+  }
+  for (auto& t : threads) t.join();
+  if (first_error) return *first_error;
+  double render_wall = seconds_since(render_start);
+
+  // Finish: meta marked complete with the stats, then one forced sync.
+  BuildSummary summary;
+  summary.tiles_total = layout->tile_count();
+  summary.tiles_candidate = candidates;
+  summary.tiles_rendered = todo.size();
+  summary.tiles_resumed = candidates - todo.size();
+  summary.tiles_stored = totals.stored_tiles;
+  summary.rays = totals.depth.rays;
+  summary.blob_bytes = totals.blob_bytes;
+  nlohmann::json bytes = totals.bytes_by_method, raw_bytes = totals.raw_bytes_by_method;
+  summary.stats = {
+      {"tiles", {{"total", summary.tiles_total}, {"with_triangles", candidates}, {"rendered", summary.tiles_rendered},
+                 {"resumed", summary.tiles_resumed}, {"stored", summary.tiles_stored}}},
+      {"scene", {{"triangles", scene->triangle_count()}, {"dropped", load_stats.dropped_triangles},
+                 {"meshes", load_stats.meshes}, {"closed_meshes", load_stats.closed_meshes}}},
+      {"rays", summary.rays},
+      {"rays_per_second", render_wall > 0 ? double(summary.rays) / render_wall : 0.0},
+      {"threads", thread_count},
+      {"seconds", {{"load", load_stats.seconds}, {"index", index_seconds},
+                   {"bvh_thread_sum", totals.depth.bvh_seconds}, {"rays_thread_sum", totals.depth.ray_seconds},
+                   {"encode_thread_sum", totals.encode_seconds}, {"store_thread_sum", totals.store_seconds},
+                   {"render_wall", render_wall}, {"total", seconds_since(total_start)}}},
+      {"bytes_by_method", bytes},
+      {"payload_bytes_by_method", raw_bytes},
+      {"peak_memory_mib", peak_memory_mib()},
+  };
+  meta.complete = true;
+  meta.build_stats = summary.stats;
+  std::string text = meta.to_json().dump();
+  std::vector<store::Store::Put> puts{{store::Database::meta, bytes_of(kMetaBuildKey), bytes_of(text)}};
+  if (Status s = db.write(puts); !s) return s.error();
+  if (Status s = db.sync(); !s) return s.error();
+  summary.stats["seconds"]["total"] = seconds_since(total_start);
+  return summary;
+}
+
+}  // namespace shadowtiles

@@ -1,0 +1,65 @@
+// BuildJob: scene file -> store (DESIGN.md §1). Loads and indexes the scene, fits the light frame,
+// renders each non-empty tile's dual depth with Embree on `threads` workers, encodes every requested
+// method and commits each tile (its blobs plus a progress mark) in one LMDB transaction.
+//
+// Resume: the store's meta holds a hash of everything that defines the output (scene bytes, light,
+// resolution, tiling, methods, builder version). Rerunning the same build into the same store skips
+// the committed tiles, so a killed build loses at most the tiles in flight. A store holding a
+// different build is refused unless `overwrite` is set.
+// Errors: invalid_input (bad scene or parameters, exit code 2 in the CLI), io_error / out_of_space
+// (store), unsupported (method not implemented).
+// Thread safety: run() uses its own worker threads; do not run two jobs on one store at once.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "builder/scene_loader.hpp"
+#include "client/light_frame.hpp"
+#include "store/method.hpp"
+#include "store/result.hpp"
+
+namespace shadowtiles {
+
+struct BuildConfig {
+  std::filesystem::path scene_path;
+  std::filesystem::path store_path;
+  Vec3 light_direction{0, 0, -1};
+  std::optional<uint32_t> resolution;   // one of resolution / texel_size
+  std::optional<double> texel_size;
+  uint32_t tile_size = 4096;
+  unsigned threads = 2;
+  std::vector<store::Method> methods{store::Method::raw};
+  LoadOptions load;
+  double bias_texels = 2.0;         // default query bias, in texel widths (stored in world units)
+  double exit_margin_texels = 4.0;  // closed-mesh exits pulled back by this (>= the bias)
+  int zstd_level = 3;
+  uint64_t initial_map_size = 1ull << 30;
+  bool overwrite = false;
+  // Progress callback, called from the coordinating thread about once a second.
+  std::function<void(const std::string& line)> on_progress;
+  // Test hook: after this many tiles are committed, the process kills itself with SIGKILL.
+  uint64_t debug_kill_after_tiles = 0;
+};
+
+struct BuildSummary {
+  uint64_t tiles_total = 0;        // tiles in the map
+  uint64_t tiles_candidate = 0;    // tiles some triangle projects onto
+  uint64_t tiles_rendered = 0;     // rendered in this run (not resumed)
+  uint64_t tiles_resumed = 0;      // already committed by an earlier run
+  uint64_t tiles_stored = 0;       // non-empty tiles written in this run
+  uint64_t rays = 0;
+  uint64_t blob_bytes = 0;         // compressed bytes written in this run, all methods
+  nlohmann::json to_json() const { return stats; }
+  nlohmann::json stats;            // everything above plus seconds by phase and bytes by method
+};
+
+Result<BuildSummary> run_build(const BuildConfig& config);
+
+}  // namespace shadowtiles

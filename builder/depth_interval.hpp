@@ -1,0 +1,35 @@
+// The dual depth of one tile: per texel the interval [lower, upper] of normalised light-space depth
+// (0 = near plane, 1 = far plane) such that any value inside gives every receiver the same shadow
+// answer as the exact entry depth (DESIGN.md §4). Misses are [1, +inf): fully lit.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace shadowtiles {
+
+struct DepthInterval {
+  float lower = 1.0f;
+  float upper = std::numeric_limits<float>::infinity();
+
+  bool contains(float value) const { return value >= lower && value <= upper; }
+};
+
+// A square tile of side `size` texels, row-major: texel (u, v) is texels[v * size + u].
+struct TileIntervals {
+  uint32_t size = 0;
+  std::vector<DepthInterval> texels;
+
+  const DepthInterval& at(uint32_t u, uint32_t v) const { return texels[size_t(v) * size + u]; }
+  DepthInterval& at(uint32_t u, uint32_t v) { return texels[size_t(v) * size + u]; }
+  // True when every texel is a miss: such a tile is empty and is not stored.
+  bool all_missed() const {
+    for (const auto& t : texels)
+      if (t.lower < 1.0f) return false;
+    return true;
+  }
+};
+
+}  // namespace shadowtiles

@@ -1,0 +1,249 @@
+#include "builder/dual_depth_renderer.hpp"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <limits>
+#include <vector>
+
+namespace shadowtiles {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+constexpr unsigned kPacket = 16;
+
+struct ClosedHit {
+  float t;
+  uint32_t prim;
+  bool front;
+};
+
+// Per-geometry data the filter needs: which closed triangles face the light.
+struct ClosedGeometryData {
+  std::vector<uint8_t> front;
+};
+
+// Intersect context extended with per-lane hit lists: the filter sees ray ids, not lanes.
+struct CollectContext {
+  RTCIntersectContext base;
+  std::array<std::vector<ClosedHit>, kPacket>* lanes;
+};
+
+// Records every closed-mesh hit and rejects it so traversal continues: afterwards each lane holds
+// all closed hits up to the nearest accepted (open-mesh) hit.
+void collect_closed_hits(const RTCFilterFunctionNArguments* args) {
+  auto* context = reinterpret_cast<CollectContext*>(args->context);
+  auto* data = static_cast<const ClosedGeometryData*>(args->geometryUserPtr);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    unsigned lane = RTCRayN_id(args->ray, args->N, i);
+    float t = RTCRayN_tfar(args->ray, args->N, i);
+    uint32_t prim = RTCHitN_primID(args->hit, args->N, i);
+    (*context->lanes)[lane % kPacket].push_back({t, prim, data->front[prim] != 0});
+    args->valid[i] = 0;
+  }
+}
+
+struct TileGeometry {
+  std::vector<float> closed_vertices, open_vertices;    // xyz per vertex, 3 vertices per triangle
+  ClosedGeometryData closed;
+  std::vector<uint8_t> open_is_heightfield;
+};
+
+// Front-facing toward the light: counter-clockwise seen from the light, i.e. the normal's depth
+// component is negative (the light travels +depth in a right-handed frame).
+bool faces_light(const LightSpacePoint& a, const LightSpacePoint& b, const LightSpacePoint& c) {
+  double nz = (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
+  return nz <= 0.0;  // edge-on counts as front: the counter then never closes early (conservative)
+}
+
+TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile) {
+  TileGeometry geometry;
+  const double u0 = double(tile.x) * scene.layout().tile_size();
+  const double v0 = double(tile.y) * scene.layout().tile_size();
+  const Scene& world = scene.scene();
+  auto emit = [&](std::vector<float>& out, const LightSpacePoint& p) {
+    out.push_back(float(p.u - u0));
+    out.push_back(float(p.v - v0));
+    out.push_back(float(p.depth));
+  };
+  for (uint32_t t : scene.triangles_of(tile)) {
+    const auto& tri = world.triangles[t];
+    const LightSpacePoint& a = scene.vertex(tri[0]);
+    const LightSpacePoint& b = scene.vertex(tri[1]);
+    const LightSpacePoint& c = scene.vertex(tri[2]);
+    MeshKind kind = world.meshes[world.triangle_mesh[t]].kind;
+    if (kind == MeshKind::closed) {
+      emit(geometry.closed_vertices, a);
+      emit(geometry.closed_vertices, b);
+      emit(geometry.closed_vertices, c);
+      geometry.closed.front.push_back(faces_light(a, b, c) ? 1 : 0);
+    } else {
+      emit(geometry.open_vertices, a);
+      emit(geometry.open_vertices, b);
+      emit(geometry.open_vertices, c);
+      geometry.open_is_heightfield.push_back(kind == MeshKind::heightfield ? 1 : 0);
+    }
+  }
+  return geometry;
+}
+
+// Attaches a triangle soup as one geometry; returns its id.
+unsigned attach_triangles(RTCDevice device, RTCScene scene, const std::vector<float>& vertices,
+                          ClosedGeometryData* filter_data) {
+  size_t triangle_count = vertices.size() / 9;
+  RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  // Embree reads vertex buffers with 16-byte loads: one float of padding past the end.
+  auto* vertex_buffer = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), triangle_count * 3));
+  std::copy(vertices.begin(), vertices.end(), vertex_buffer);
+  auto* index_buffer = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), triangle_count));
+  for (uint32_t i = 0; i < triangle_count * 3; ++i) index_buffer[i] = i;
+  if (filter_data) {
+    rtcSetGeometryUserData(geometry, filter_data);
+    rtcSetGeometryIntersectFilterFunction(geometry, collect_closed_hits);
+  }
+  rtcCommitGeometry(geometry);
+  unsigned id = rtcAttachGeometry(scene, geometry);
+  rtcReleaseGeometry(geometry);
+  return id;
+}
+
+// Combines one ray's hits into its interval (rules in the header).
+DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t, bool open_is_heightfield,
+                               float exit_margin) {
+  // Closed hits beyond the nearest open hit were recorded before that hit shortened the ray.
+  std::erase_if(closed_hits, [&](const ClosedHit& h) { return h.t > open_t; });
+  // Spatial splits may report one triangle twice.
+  std::sort(closed_hits.begin(), closed_hits.end(), [](const ClosedHit& a, const ClosedHit& b) {
+    return a.prim < b.prim;
+  });
+  closed_hits.erase(std::unique(closed_hits.begin(), closed_hits.end(),
+                                [](const ClosedHit& a, const ClosedHit& b) { return a.prim == b.prim; }),
+                    closed_hits.end());
+  std::sort(closed_hits.begin(), closed_hits.end(), [](const ClosedHit& a, const ClosedHit& b) {
+    return a.t != b.t ? a.t < b.t : a.front > b.front;
+  });
+
+  DepthInterval interval;  // miss: [1, +inf)
+  if (closed_hits.empty() && open_t == std::numeric_limits<float>::infinity()) return interval;
+  if (closed_hits.empty() || open_t <= closed_hits.front().t) {
+    interval.lower = open_t;
+    interval.upper = open_is_heightfield ? std::max(open_t, 1.0f) : open_t;
+    return interval;
+  }
+  interval.lower = closed_hits.front().t;
+  interval.upper = interval.lower;
+  if (!closed_hits.front().front) return interval;
+  int depth = 0;
+  for (const ClosedHit& hit : closed_hits) {
+    depth += hit.front ? 1 : -1;
+    if (depth < 0) break;  // inconsistent: stay conservative
+    if (depth == 0) {
+      interval.upper = std::max(interval.lower, hit.t - exit_margin);
+      break;
+    }
+  }
+  return interval;
+}
+
+}  // namespace
+
+void DualDepthStats::add(const DualDepthStats& other) {
+  rays += other.rays;
+  hits += other.hits;
+  exits += other.exits;
+  triangles += other.triangles;
+  bvh_seconds += other.bvh_seconds;
+  ray_seconds += other.ray_seconds;
+}
+
+DualDepthRenderer::DualDepthRenderer(const EmbreeDevice& device, const LightSpaceScene& scene,
+                                     DualDepthOptions options)
+    : device_(device), scene_(scene), options_(options) {}
+
+Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* stats) const {
+  const uint32_t size = scene_.layout().tile_size();
+  TileIntervals intervals;
+  intervals.size = size;
+  intervals.texels.assign(size_t(size) * size, DepthInterval{});
+  DualDepthStats local;
+  if (!scene_.layout().contains(tile))
+    return make_error(ErrorCode::invalid_input, "tile outside the map");
+  if (scene_.triangles_of(tile).empty()) {
+    if (stats) stats->add(local);
+    return intervals;
+  }
+
+  auto bvh_start = Clock::now();
+  TileGeometry geometry = gather_tile_geometry(scene_, tile);
+  EmbreeScene rtc_scene(rtcNewScene(device_.get()));
+  rtcSetSceneFlags(rtc_scene.get(), RTC_SCENE_FLAG_ROBUST);
+  unsigned closed_id = RTC_INVALID_GEOMETRY_ID;
+  if (!geometry.closed.front.empty())
+    closed_id = attach_triangles(device_.get(), rtc_scene.get(), geometry.closed_vertices, &geometry.closed);
+  unsigned open_id = RTC_INVALID_GEOMETRY_ID;
+  if (!geometry.open_is_heightfield.empty())
+    open_id = attach_triangles(device_.get(), rtc_scene.get(), geometry.open_vertices, nullptr);
+  rtcCommitScene(rtc_scene.get());
+  if (RTCError error = rtcGetDeviceError(device_.get()); error != RTC_ERROR_NONE)
+    return make_error(ErrorCode::io_error, "embree failed to build the tile BVH (error " +
+                                               std::to_string(int(error)) + ")");
+  local.triangles = geometry.closed.front.size() + geometry.open_is_heightfield.size();
+  local.bvh_seconds = seconds_since(bvh_start);
+
+  auto ray_start = Clock::now();
+  std::array<std::vector<ClosedHit>, kPacket> lanes;
+  CollectContext context;
+  rtcInitIntersectContext(&context.base);
+  context.base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  context.lanes = &lanes;
+  alignas(64) RTCRayHit16 packet;
+  alignas(64) int valid[kPacket];
+  const float inf = std::numeric_limits<float>::infinity();
+  for (uint32_t v = 0; v < size; ++v) {
+    for (uint32_t u_start = 0; u_start < size; u_start += kPacket) {
+      for (unsigned lane = 0; lane < kPacket; ++lane) {
+        uint32_t u = u_start + lane;
+        valid[lane] = u < size ? -1 : 0;
+        packet.ray.org_x[lane] = float(u) + 0.5f;
+        packet.ray.org_y[lane] = float(v) + 0.5f;
+        packet.ray.org_z[lane] = 0.0f;
+        packet.ray.dir_x[lane] = 0.0f;
+        packet.ray.dir_y[lane] = 0.0f;
+        packet.ray.dir_z[lane] = 1.0f;
+        packet.ray.tnear[lane] = 0.0f;
+        packet.ray.tfar[lane] = inf;
+        packet.ray.time[lane] = 0.0f;
+        packet.ray.mask[lane] = 0xFFFFFFFFu;
+        packet.ray.id[lane] = lane;
+        packet.ray.flags[lane] = 0;
+        packet.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
+        packet.hit.instID[0][lane] = RTC_INVALID_GEOMETRY_ID;
+        lanes[lane].clear();
+      }
+      rtcIntersect16(valid, rtc_scene.get(), &context.base, &packet);
+      for (unsigned lane = 0; lane < kPacket && u_start + lane < size; ++lane) {
+        bool open_hit = packet.hit.geomID[lane] == open_id && open_id != RTC_INVALID_GEOMETRY_ID;
+        float open_t = open_hit ? packet.ray.tfar[lane] : inf;
+        bool heightfield = open_hit && geometry.open_is_heightfield[packet.hit.primID[lane]] != 0;
+        DepthInterval interval = resolve_interval(lanes[lane], open_t, heightfield, options_.exit_margin);
+        intervals.at(u_start + lane, v) = interval;
+        if (interval.lower < 1.0f) ++local.hits;
+        if (interval.upper > interval.lower) ++local.exits;
+      }
+    }
+  }
+  (void)closed_id;
+  local.rays = uint64_t(size) * size;
+  local.ray_seconds = seconds_since(ray_start);
+  if (stats) stats->add(local);
+  return intervals;
+}
+
+}  // namespace shadowtiles

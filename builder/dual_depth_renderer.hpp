@@ -1,0 +1,54 @@
+// DualDepthRenderer: per tile, one Embree ray per texel centre along the light gives the interval
+// [lower, upper] of depths that shadow every receiver alike (DESIGN.md §4):
+// - lower = first hit (entry);
+// - upper = where the ray leaves all closed meshes: closed-mesh hits are walked in depth order with
+//   a counter (+1 front-facing, -1 back-facing); where it returns to 0 is the exit. The exit is
+//   pulled back by `exit_margin` so that receivers lying on the exit surface (a box standing on a
+//   floor) stay shadowed for any query bias up to that margin;
+// - a first hit on an open mesh, a back-facing first hit, or a counter that never returns to 0
+//   before an open surface: upper = lower (conservative, never leaks light);
+// - a first hit on a heightfield mesh: upper = 1 (solid down to the far plane);
+// - no hit: [1, +inf), fully lit.
+// The tile's BVH holds only the tile's triangles, in tile-local light space (x, y in texels from the
+// tile corner, z = normalised depth), so float precision is relative to the tile, not the world.
+// Thread safety: render() may run concurrently on several threads (each call owns its BVH).
+#pragma once
+
+#include <cstdint>
+
+#include "builder/depth_interval.hpp"
+#include "builder/embree_device.hpp"
+#include "builder/light_space_scene.hpp"
+
+namespace shadowtiles {
+
+struct DualDepthStats {
+  uint64_t rays = 0;
+  uint64_t hits = 0;
+  uint64_t exits = 0;          // texels with upper > lower
+  uint64_t triangles = 0;      // in the tile's BVH
+  double bvh_seconds = 0;
+  double ray_seconds = 0;
+
+  void add(const DualDepthStats& other);
+};
+
+struct DualDepthOptions {
+  // Normalised depth subtracted from closed-mesh exits (see above); >= the largest query bias.
+  float exit_margin = 0.0f;
+};
+
+class DualDepthRenderer {
+ public:
+  DualDepthRenderer(const EmbreeDevice& device, const LightSpaceScene& scene, DualDepthOptions options = {});
+
+  // Renders `tile` of the layout; a tile without triangles returns all misses without tracing.
+  Result<TileIntervals> render(TileCoord tile, DualDepthStats* stats = nullptr) const;
+
+ private:
+  const EmbreeDevice& device_;
+  const LightSpaceScene& scene_;
+  DualDepthOptions options_;
+};
+
+}  // namespace shadowtiles

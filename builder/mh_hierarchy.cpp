@@ -1,0 +1,104 @@
+#include "builder/mh_hierarchy.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "client/mh_format.hpp"
+
+namespace shadowtiles {
+namespace F = mh_format;
+
+float mh_value_for(const DepthInterval& interval) {
+  const float lo = interval.lower, hi = interval.upper;
+  if (std::isfinite(lo) && std::isfinite(hi)) return std::clamp(lo + (hi - lo) * 0.5f, lo, hi);
+  if (std::isfinite(lo)) return lo;
+  if (std::isfinite(hi)) return hi;
+  return 1.0f;  // unconstrained: no texel reads this value
+}
+
+MhTileSummary summarize(const MhHierarchy& h) { return MhTileSummary{h.root}; }
+
+namespace {
+
+// Depth-first over reachable blocks with a visited mark; recursion depth is bounded by `levels`.
+struct Counter {
+  const MhHierarchy& h;
+  std::vector<uint8_t> seen;
+  std::vector<uint64_t> tree_nodes;  // per block: nodes of the expanded subtree below it
+  MhNodeCounts counts;
+
+  uint64_t visit(uint32_t b) {
+    if (seen[b]) return tree_nodes[b];
+    seen[b] = 1;
+    counts.blocks += 1;
+    const uint8_t mask = h.block_mask[b];
+    uint64_t total = 0;
+    unsigned r = 0;
+    for (unsigned i = 0; i < 4; ++i) {
+      const unsigned code = F::child_code(mask, i);
+      if (code == 0) continue;
+      total += 1;
+      if (code == F::kCodeLeaf) counts.leaves += 1;
+      if (code == F::kCodeEmpty) counts.empty += 1;
+      if (code == F::kCodeInner) counts.inner += 1;
+      if (code & 2u) total += visit(h.child_block[h.block_first_child[b] + r++]);
+    }
+    return tree_nodes[b] = total;
+  }
+};
+
+}  // namespace
+
+MhNodeCounts count_nodes(const MhHierarchy& h) {
+  Counter c{h, std::vector<uint8_t>(h.block_count(), 0), std::vector<uint64_t>(h.block_count(), 0), {}};
+  c.counts.tree_nodes = 1;
+  if (h.root_mask != 0) {
+    c.counts.inner = 1;
+    c.counts.tree_nodes += c.visit(h.root_block);
+  } else {
+    c.counts.leaves = 1;
+  }
+  return c.counts;
+}
+
+Status check_structure(const MhHierarchy& h) {
+  auto fail = [](const std::string& m) { return Status(make_error(ErrorCode::invalid_input, "MH hierarchy: " + m)); };
+  if (h.levels > 20 || h.size != (uint32_t(1) << h.levels)) return fail("size is not 2^levels");
+  const size_t n = h.block_count();
+  if (h.block_first_child.size() != n || h.block_first_value.size() != n) return fail("block arrays differ in size");
+  if (h.root_mask != 0 && (h.levels == 0 || h.root_block >= n)) return fail("bad root block");
+  for (size_t b = 0; b < n; ++b) {
+    const uint8_t m = h.block_mask[b];
+    if (m == 0) return fail("block with no children");
+    if (uint64_t(h.block_first_child[b]) + F::branch_children(m) > h.child_block.size() ||
+        uint64_t(h.block_first_value[b]) + F::valued_children(m) > h.intervals.size())
+      return fail("block entries out of range");
+    for (unsigned r = 0; r < F::branch_children(m); ++r)
+      if (h.child_block[h.block_first_child[b] + r] >= n) return fail("child block out of range");
+  }
+  // Heights by memoised depth-first search; a cycle shows up as a path longer than the levels.
+  std::vector<int> height(n, -1);
+  std::vector<uint8_t> on_path(n, 0);
+  bool too_deep = false;
+  auto visit = [&](auto&& self, uint32_t b, unsigned depth) -> int {
+    if (depth > h.levels || on_path[b]) return too_deep = true, 0;
+    if (height[b] >= 0) {
+      if (depth + unsigned(height[b]) > h.levels) too_deep = true;
+      return height[b];
+    }
+    on_path[b] = 1;
+    int hb = 0;
+    const uint8_t m = h.block_mask[b];
+    for (unsigned r = 0; r < F::branch_children(m) && !too_deep; ++r)
+      hb = std::max(hb, 1 + self(self, h.child_block[h.block_first_child[b] + r], depth + 1));
+    on_path[b] = 0;
+    if (depth + unsigned(hb) > h.levels) too_deep = true;
+    return height[b] = hb;
+  };
+  if (h.root_mask != 0) visit(visit, h.root_block, 1);
+  if (too_deep) return fail("paths longer than the level count (or a cycle)");
+  return Status::success();
+}
+
+}  // namespace shadowtiles

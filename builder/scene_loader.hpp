@@ -1,0 +1,69 @@
+// Scene loader: reads a scene file into a Scene (builder/scene.hpp) in world coordinates, one
+// MeshInfo per mesh instance, each classified closed/open (DESIGN.md §4) or declared a heightfield.
+//
+// Formats: everything assimp 5.2 imports, chosen by file extension: OBJ, PLY (ascii and binary),
+// glTF 2.0 (.gltf, .glb), FBX, Collada (.dae), IFC, STL, OFF, 3DS, Terragen (.ter), ...
+// Only triangles are kept (polygons are triangulated; points and lines are ignored). Node transforms
+// are composed and applied in double precision here rather than by assimp (whose matrices are
+// float): large translations (geo-referenced nodes at 10^6 units) keep sub-millimetre precision, and
+// every mesh instance keeps its node name for heightfield matching. Mirroring transforms (negative
+// determinant) swap the winding so front faces stay front faces.
+// Coordinates are not converted: the file's own axes and units are kept, except where assimp's
+// importer itself converts (its IFC importer turns IFC's z-up into y-up through the root node).
+// Terragen .ter: assimp builds a z-up grid in the file's units: x, y from 0 to (size - 1) * SCAL
+// (metres by Terragen's convention; 30 m for RealisticTerrain.ter, 256 x 256 samples, 130,050
+// triangles after the loader drops none) and z = height in metres, as one mesh. Mark it a
+// heightfield. See tests/test_scene_loader.cpp for the values checked.
+//
+// Mesh names: "<node>/<mesh>" (or just one of them when the other is empty or equal), "mesh<i>"
+// when both are empty; repeats get "#2", "#3"... A heightfield entry matches a mesh instance by its
+// full name, its node name or its mesh name; "*" matches all.
+//
+// Errors: not_found when the file does not exist; unsupported when no importer handles its
+// extension; invalid_input when assimp fails (the message carries the file name and assimp's message,
+// which often names the line), when nothing but points/lines/degenerate triangles remain ("no
+// triangles"), when a heightfield name matches no mesh (the message lists the meshes), or when the
+// scene exceeds 2^32 - 1 vertices or triangles.
+// Logging: spdlog info per scene (triangles, dropped, bounds, seconds, classification summary),
+// debug per mesh. assimp's own log goes to spdlog at debug level (a process-wide assimp logger is
+// installed on first use).
+// Thread safety: load_scene may run concurrently on different files (one assimp Importer each).
+// Untrusted input: meant to be safe (no crash, errors returned): assimp exceptions and bad_alloc
+// are caught, assimp's data-structure validation runs, every index is checked. assimp's own parsers
+// are the weak point: a hostile file may still make assimp use much memory or time.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "builder/scene.hpp"
+#include "client/light_frame.hpp"
+#include "store/result.hpp"
+
+namespace shadowtiles {
+
+struct LoadOptions {
+  // Meshes that are solid below (terrain): names as above, or "*" for all. Each must match a mesh.
+  std::vector<std::string> heightfield_meshes;
+  // The scene's up axis. Informational: the loader does not rotate anything; it is logged and used
+  // by callers to turn sun azimuth/elevation into a light direction.
+  UpAxis up = UpAxis::z;
+};
+
+struct LoadStats {
+  uint64_t triangles = 0;          // kept, = Scene::triangle_count()
+  uint64_t dropped_triangles = 0;  // degenerate, non-finite or malformed (see Scene::add_mesh)
+  uint64_t meshes = 0;             // mesh instances, = Scene::meshes.size()
+  uint64_t closed_meshes = 0;
+  uint64_t open_meshes = 0;
+  uint64_t heightfield_meshes = 0;
+  double seconds = 0;              // wall time of the whole load
+};
+
+// Loads `file`. `stats`, when given, is filled on success (and left untouched on error).
+Result<Scene> load_scene(const std::filesystem::path& file, const LoadOptions& options,
+                         LoadStats* stats = nullptr);
+
+}  // namespace shadowtiles

@@ -1,0 +1,113 @@
+// `shadowtiles build SCENE --out STORE ...`: bake the sun's shadows of a scene into a store.
+#include <cstdio>
+#include <iostream>
+
+#include <spdlog/spdlog.h>
+
+#include "builder/build_job.hpp"
+#include "cli/cli_parsing.hpp"
+#include "cli/commands.hpp"
+#include "cli/exit_codes.hpp"
+
+namespace shadowtiles::cli {
+namespace {
+
+struct BuildFlags {
+  std::string scene, out, sun, light_dir, methods = "raw", up = "z";
+  uint32_t resolution = 0;
+  double texel_size = 0;
+  uint32_t tile = 4096;
+  unsigned threads = 2;
+  std::vector<std::string> heightfields;
+  double bias_texels = 2.0, exit_margin_texels = 4.0;
+  bool overwrite = false, json = false;
+  uint64_t kill_after = 0;
+};
+
+int run(const BuildFlags& flags) {
+  BuildConfig config;
+  config.scene_path = flags.scene;
+  config.store_path = flags.out;
+  auto up = parse_up_axis(flags.up);
+  if (!up) { spdlog::error("{}", up.error().message); return kInvalidInput; }
+  config.load.up = *up;
+  config.load.heightfield_meshes = flags.heightfields;
+  if (!flags.light_dir.empty()) {
+    auto dir = parse_vec3(flags.light_dir, "--light-dir");
+    if (!dir) { spdlog::error("{}", dir.error().message); return kInvalidInput; }
+    config.light_direction = *dir;
+  } else {
+    auto sun = parse_numbers(flags.sun.empty() ? "135,45" : flags.sun, 2, "--sun");
+    if (!sun) { spdlog::error("{}", sun.error().message); return kInvalidInput; }
+    auto dir = light_direction_from_sun((*sun)[0], (*sun)[1], *up);
+    if (!dir) { spdlog::error("{}", dir.error().message); return kInvalidInput; }
+    config.light_direction = *dir;
+  }
+  if (flags.texel_size > 0) config.texel_size = flags.texel_size;
+  else config.resolution = flags.resolution ? flags.resolution : 4096;
+  config.tile_size = flags.tile;
+  config.threads = flags.threads;
+  auto methods = store::parse_method_list(flags.methods);
+  if (!methods) { spdlog::error("--method: {}", methods.error().message); return kInvalidInput; }
+  config.methods = *methods;
+  config.bias_texels = flags.bias_texels;
+  config.exit_margin_texels = flags.exit_margin_texels;
+  config.overwrite = flags.overwrite;
+  config.debug_kill_after_tiles = flags.kill_after;
+  config.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
+
+  auto summary = run_build(config);
+  if (!summary) {
+    spdlog::error("build failed ({}): {}", error_code_name(summary.error().code), summary.error().message);
+    return exit_code_for(summary.error());
+  }
+  if (flags.json) {
+    std::cout << summary->stats.dump(2) << "\n";
+  } else {
+    const auto& s = summary->stats;
+    std::printf("built %s -> %s\n", flags.scene.c_str(), flags.out.c_str());
+    std::printf("  tiles: %llu total, %llu with triangles, %llu rendered now, %llu resumed, %llu stored\n",
+                (unsigned long long)summary->tiles_total, (unsigned long long)summary->tiles_candidate,
+                (unsigned long long)summary->tiles_rendered, (unsigned long long)summary->tiles_resumed,
+                (unsigned long long)summary->tiles_stored);
+    std::printf("  rays: %llu (%.2f Mrays/s)\n", (unsigned long long)summary->rays,
+                s.value("rays_per_second", 0.0) / 1e6);
+    if (s.contains("bytes_by_method"))
+      for (auto& [method, bytes] : s["bytes_by_method"].items())
+        std::printf("  bytes %-6s %llu\n", method.c_str(), (unsigned long long)bytes.get<uint64_t>());
+    if (s.contains("seconds"))
+      for (auto& [phase, seconds] : s["seconds"].items())
+        std::printf("  seconds %-18s %.3f\n", phase.c_str(), seconds.get<double>());
+    if (s.contains("peak_memory_mib")) std::printf("  peak memory %.0f MiB\n", s["peak_memory_mib"].get<double>());
+  }
+  return kOk;
+}
+
+}  // namespace
+
+void add_build_command(CLI::App& app, int& exit_code) {
+  auto flags = std::make_shared<BuildFlags>();
+  CLI::App* cmd = app.add_subcommand("build", "Bake a scene's sun shadows into a store");
+  cmd->add_option("scene", flags->scene, "Scene file (OBJ, PLY, glTF/GLB, FBX, DAE, IFC, TER, ...)")->required();
+  cmd->add_option("--out,-o", flags->out, "Store directory (LMDB) to write")->required();
+  auto* sun = cmd->add_option("--sun", flags->sun, "Sun azimuth,elevation in degrees (default 135,45)");
+  cmd->add_option("--light-dir", flags->light_dir, "Direction the light travels, X,Y,Z")->excludes(sun);
+  cmd->add_option("--up", flags->up, "Scene up axis for --sun: z or y")->capture_default_str();
+  auto* res = cmd->add_option("--resolution,-r", flags->resolution, "Shadow map texels per side (power of two <= 2^20)");
+  cmd->add_option("--texel-size", flags->texel_size, "World size of a texel (picks the resolution)")->excludes(res);
+  cmd->add_option("--tile", flags->tile, "Tile side in texels (power of two)")->capture_default_str();
+  cmd->add_option("--threads,-j", flags->threads, "Worker threads")->capture_default_str();
+  cmd->add_option("--method,-m", flags->methods, "Methods to store, comma-separated")->capture_default_str();
+  cmd->add_option("--heightfield", flags->heightfields, "Mesh name solid below (terrain); '*' for all")
+      ->take_all();
+  cmd->add_option("--bias-texels", flags->bias_texels, "Default query bias in texel widths")->capture_default_str();
+  cmd->add_option("--exit-margin-texels", flags->exit_margin_texels,
+                  "Closed-mesh exits pulled back by this many texel widths (>= bias)")->capture_default_str();
+  cmd->add_flag("--overwrite", flags->overwrite, "Replace a different build in --out");
+  cmd->add_flag("--json", flags->json, "Print the build summary as JSON");
+  cmd->add_option("--debug-kill-after-tiles", flags->kill_after, "Test hook: SIGKILL self after N tiles")
+      ->group("");
+  cmd->callback([flags, &exit_code] { exit_code = run(*flags); });
+}
+
+}  // namespace shadowtiles::cli

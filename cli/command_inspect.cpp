@@ -1,0 +1,90 @@
+// `shadowtiles inspect STORE [--json]`: what a store holds: the build's meta and, per method, tiles
+// and bytes (compressed at rest and decoded payload).
+#include <cstdio>
+#include <iostream>
+#include <map>
+
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "cli/commands.hpp"
+#include "cli/exit_codes.hpp"
+#include "client/store_meta.hpp"
+#include "store/blob.hpp"
+#include "store/lmdb_store.hpp"
+#include "store/tile_key.hpp"
+
+namespace shadowtiles::cli {
+namespace {
+
+struct InspectFlags {
+  std::string store;
+  bool json = false;
+};
+
+struct MethodTotals {
+  uint64_t tiles = 0, blob_bytes = 0, payload_bytes = 0;
+};
+
+int run(const InspectFlags& flags) {
+  auto opened = store::Store::open(flags.store, {});
+  if (!opened) { spdlog::error("cannot open store: {}", opened.error().message); return exit_code_for(opened.error()); }
+  auto raw_meta = (*opened)->get(store::Database::meta, store::as_bytes(kMetaBuildKey));
+  if (!raw_meta) { spdlog::error("{}", raw_meta.error().message); return exit_code_for(raw_meta.error()); }
+  if (!raw_meta->has_value()) { spdlog::error("{} holds no build", flags.store); return kInvalidInput; }
+  auto meta = StoreMeta::parse(std::string_view(reinterpret_cast<const char*>((*raw_meta)->data()), (*raw_meta)->size()));
+  if (!meta) { spdlog::error("{}", meta.error().message); return exit_code_for(meta.error()); }
+
+  std::map<std::string, MethodTotals> totals;
+  Status corrupt;
+  Status walked = (*opened)->for_each(store::Database::tiles, {}, [&](auto key, auto value) {
+    auto tile_key = store::decode_tile_key(key);
+    auto header = store::check_blob(value);
+    if (!tile_key || !header) {
+      corrupt = make_error(ErrorCode::corrupt_data, "a tile record fails its checks");
+      return false;
+    }
+    auto& t = totals[store::method_name(tile_key->method)];
+    ++t.tiles;
+    t.blob_bytes += value.size();
+    t.payload_bytes += header->raw_size;
+    return true;
+  });
+  if (!walked) { spdlog::error("{}", walked.error().message); return exit_code_for(walked.error()); }
+  if (!corrupt) { spdlog::error("{}", corrupt.error().message); return kCorruptStore; }
+
+  const double texels = double(meta->resolution) * meta->resolution;
+  nlohmann::json methods = nlohmann::json::object();
+  for (auto& [name, t] : totals)
+    methods[name] = {{"tiles", t.tiles},
+                     {"bytes", t.blob_bytes},
+                     {"payload_bytes", t.payload_bytes},
+                     {"bits_per_texel", 8.0 * double(t.blob_bytes) / texels},
+                     {"ratio_vs_float32_map", double(t.blob_bytes) / (4.0 * texels)}};
+  nlohmann::json report = {{"meta", meta->to_json()}, {"methods", methods}};
+  if (flags.json) {
+    std::cout << report.dump(2) << "\n";
+    return kOk;
+  }
+  std::printf("store %s: %u^2 texels, tiles of %u^2, %s, scene %s (%llu triangles)\n", flags.store.c_str(),
+              meta->resolution, meta->tile_size, meta->complete ? "complete" : "INCOMPLETE",
+              meta->scene_path.c_str(), (unsigned long long)meta->scene_triangles);
+  std::printf("%-8s %8s %14s %14s %10s %10s\n", "method", "tiles", "bytes", "payload", "bits/texel", "vs float32");
+  for (auto& [name, t] : totals)
+    std::printf("%-8s %8llu %14llu %14llu %10.4f %10.4f\n", name.c_str(), (unsigned long long)t.tiles,
+                (unsigned long long)t.blob_bytes, (unsigned long long)t.payload_bytes,
+                8.0 * double(t.blob_bytes) / texels, double(t.blob_bytes) / (4.0 * texels));
+  return kOk;
+}
+
+}  // namespace
+
+void add_inspect_command(CLI::App& app, int& exit_code) {
+  auto flags = std::make_shared<InspectFlags>();
+  CLI::App* cmd = app.add_subcommand("inspect", "Show what a store holds: meta, tiles and bytes per method");
+  cmd->add_option("store", flags->store, "Store directory")->required();
+  cmd->add_flag("--json", flags->json, "Print JSON");
+  cmd->callback([flags, &exit_code] { exit_code = run(*flags); });
+}
+
+}  // namespace shadowtiles::cli

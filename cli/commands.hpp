@@ -1,0 +1,12 @@
+// Each `shadowtiles <command>` registers itself on the app; its callback stores the exit code.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace shadowtiles::cli {
+
+void add_build_command(CLI::App& app, int& exit_code);
+void add_query_command(CLI::App& app, int& exit_code);
+void add_inspect_command(CLI::App& app, int& exit_code);
+
+}  // namespace shadowtiles::cli

@@ -1,0 +1,29 @@
+// DecodedTile: a tile of any method, ready for random-access lookups. Each method's decoder adapts
+// its view to this interface so the query layer (point, PCF, LOD) is written once.
+// Thread safety: implementations are immutable after decoding; lookups may run concurrently.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+
+#include "store/method.hpp"
+#include "store/result.hpp"
+
+namespace shadowtiles {
+
+class DecodedTile {
+ public:
+  virtual ~DecodedTile() = default;
+  virtual uint32_t size() const = 0;
+  // Shadow value of tile-local texel (u, v) < size(); lit when depth <= value + bias.
+  // `max_level` limits the descent of hierarchical methods (0 = tile root); flat methods ignore it.
+  virtual float value(uint32_t u, uint32_t v, unsigned max_level = 255) const = 0;
+  virtual size_t memory_bytes() const = 0;
+};
+
+// Decodes a blob's payload for `method`. Errors: corrupt_data (malformed payload), unsupported.
+// Safe on untrusted input.
+Result<std::shared_ptr<const DecodedTile>> decode_tile(store::Method method, std::span<const uint8_t> payload);
+
+}  // namespace shadowtiles

@@ -1,0 +1,366 @@
+#include "client/mh_decoder.hpp"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cassert>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "client/mh_format.hpp"
+
+namespace shadowtiles {
+namespace {
+
+namespace F = mh_format;
+static_assert(std::endian::native == std::endian::little, "MH payloads are read with memcpy: little-endian only");
+
+// Per mask: how many children have records, and each child's rank among records / values, so a
+// step is two table reads instead of bit counting.
+struct MaskInfo {
+  uint8_t records;
+  uint8_t record_rank[4];
+  uint8_t value_rank[4];
+};
+
+constexpr std::array<MaskInfo, 256> make_mask_info() {
+  std::array<MaskInfo, 256> table{};
+  for (unsigned mask = 0; mask < 256; ++mask) {
+    MaskInfo info{};
+    uint8_t records = 0, values = 0;
+    for (unsigned i = 0; i < 4; ++i) {
+      info.record_rank[i] = records;
+      info.value_rank[i] = values;
+      unsigned code = F::child_code(uint8_t(mask), i);
+      records += (code >> 1) & 1;
+      values += code & 1;
+    }
+    info.records = records;
+    table[mask] = info;
+  }
+  return table;
+}
+constexpr std::array<MaskInfo, 256> kMaskInfo = make_mask_info();
+
+inline float load_f32(const uint8_t* p) {
+  float f;
+  std::memcpy(&f, p, 4);
+  return f;
+}
+inline uint16_t load_u16(const uint8_t* p) {
+  uint16_t x;
+  std::memcpy(&x, p, 2);
+  return x;
+}
+inline uint32_t load_u32(const uint8_t* p) {
+  uint32_t x;
+  std::memcpy(&x, p, 4);
+  return x;
+}
+template <unsigned W>
+inline uint32_t load_offset(const uint8_t* p) {
+  uint32_t x = 0;
+  std::memcpy(&x, p, W);
+  return x;
+}
+inline uint32_t load_offset(const uint8_t* p, unsigned width) {
+  uint32_t x = 0;
+  std::memcpy(&x, p, width);
+  return x;
+}
+
+inline unsigned child_index(uint32_t u, uint32_t v, unsigned shift) {
+  return ((u >> shift) & 1u) | (((v >> shift) & 1u) << 1);
+}
+
+// One step from a node (value, mask, offset) to its child i. Returns false when the child is absent
+// (the walk ends at the current node). A leaf child is entered with mask = 0.
+template <unsigned W, class State>
+inline bool step(const uint8_t* stream, unsigned i, State& s) {
+  const unsigned code = F::child_code(s.mask, i);
+  if (code == 0) return false;
+  const MaskInfo& info = kMaskInfo[s.mask];
+  const uint8_t* block = stream + s.offset;
+  if (code & 1u) s.value = load_f32(block + info.records * (1 + W) + 4 * info.value_rank[i]);
+  if (code & 2u) {
+    const uint8_t* record = block + info.record_rank[i] * (1 + W);
+    s.mask = record[0];
+    s.offset = load_offset<W>(record + 1);
+  } else {
+    s.mask = 0;
+    s.offset = 0;
+  }
+  return true;
+}
+
+// Walks from `s` at `level` toward (u, v) down to `stop_level`; returns the level reached.
+template <unsigned W, class State>
+inline unsigned walk(const uint8_t* stream, State& s, unsigned level, unsigned stop_level, unsigned levels,
+                     uint32_t u, uint32_t v) {
+  while (s.mask != 0 && level < stop_level) {
+    if (!step<W>(stream, child_index(u, v, levels - 1 - level), s)) break;
+    ++level;
+  }
+  return level;
+}
+
+Error corrupt(const std::string& what) { return make_error(ErrorCode::corrupt_data, "MH payload: " + what); }
+
+}  // namespace
+
+Result<MhTileView> MhTileView::parse(std::span<const uint8_t> payload, const MhParseOptions& options) {
+  const uint8_t* h = payload.data();
+  if (payload.size() < F::kHeaderBytes) return corrupt("shorter than its header");
+  if (std::memcmp(h + F::kOffMagic, F::kMagic, 4) != 0) return corrupt("bad magic");
+  const uint16_t version = load_u16(h + F::kOffVersion);
+  if (version > F::kFormatVersion)
+    return make_error(ErrorCode::unsupported, "MH payload format version " + std::to_string(version) +
+                                                  " is newer than this decoder (" +
+                                                  std::to_string(F::kFormatVersion) + ")");
+  if (version != F::kFormatVersion) return corrupt("bad format version " + std::to_string(version));
+  const uint16_t flags = load_u16(h + F::kOffFlags);
+  if (flags & ~F::kKnownFlags) return corrupt("unknown flags");
+
+  MhTileView view;
+  view.size_ = load_u32(h + F::kOffSize);
+  view.levels_ = h[F::kOffLevels];
+  view.offset_width_ = h[F::kOffOffsetWidth];
+  const unsigned embedded_skip = h[F::kOffSkipLevel];
+  view.root_mask_ = h[F::kOffRootMask];
+  view.root_value_ = load_f32(h + F::kOffRootValue);
+  view.root_block_ = load_u32(h + F::kOffRootBlock);
+  const uint32_t stream_bytes = load_u32(h + F::kOffStreamBytes);
+  const uint32_t block_count = load_u32(h + F::kOffBlockCount);
+  const uint32_t record_count = load_u32(h + F::kOffRecordCount);
+  const uint32_t value_count = load_u32(h + F::kOffValueCount);
+  const unsigned L = view.levels_, W = view.offset_width_;
+
+  if (L > F::kMaxLevels || view.size_ != (uint32_t(1) << L)) return corrupt("bad size or level count");
+  if (W < 1 || W > 4) return corrupt("bad offset width");
+  const bool has_skip = flags & F::kFlagSkipList;
+  if (has_skip ? (embedded_skip < 1 || embedded_skip > std::min(L, F::kMaxSkipLevel)) : embedded_skip != 0)
+    return corrupt("bad skip list level");
+  if (!std::isfinite(view.root_value_)) return corrupt("non-finite root value");
+  if (L == 0 && view.root_mask_ != 0) return corrupt("a 1x1 tile cannot have children");
+  if (view.root_mask_ == 0 && (view.root_block_ != 0 || stream_bytes != 0))
+    return corrupt("leaf root with a node stream");
+  const uint64_t skip_bytes = has_skip ? (uint64_t(1) << (2 * embedded_skip)) * F::skip_entry_bytes(W) : 0;
+  if (uint64_t(payload.size()) != F::kHeaderBytes + skip_bytes + stream_bytes)
+    return corrupt("size " + std::to_string(payload.size()) + " does not match its header");
+  view.stream_ = h + F::kHeaderBytes + skip_bytes;
+
+  MhStats& st = view.stats_;
+  st.size = view.size_;
+  st.levels = L;
+  st.merged = flags & F::kFlagMerged;
+  st.offset_width = W;
+  st.skip_level = embedded_skip;
+  st.payload_bytes = payload.size();
+  st.header_bytes = F::kHeaderBytes;
+  st.skip_list_bytes = skip_bytes;
+  st.stream_bytes = stream_bytes;
+  (view.root_mask_ ? st.inner_nodes : st.leaf_nodes) += 1;
+
+  // Visit every reachable block once in offset order (a min-heap of references). Blocks must tile the
+  // stream exactly from offset 0 and every reference must point forward, so the block graph is
+  // acyclic and every byte is accounted for.
+  if (view.root_mask_ != 0) {
+    const uint8_t* stream = view.stream_;
+    const size_t R = F::record_bytes(W);
+    auto key = [](uint32_t offset, uint8_t mask) { return (uint64_t(offset) << 8) | mask; };
+    std::vector<uint64_t> heap{key(view.root_block_, view.root_mask_)};
+    struct Block {
+      uint32_t offset;
+      uint8_t mask;
+    };
+    std::vector<Block> blocks;
+    uint64_t prev_end = 0, records = 0, values = 0;
+    int64_t prev_offset = -1;
+    uint8_t prev_mask = 0;
+    while (!heap.empty()) {
+      std::pop_heap(heap.begin(), heap.end(), std::greater<>());
+      const uint64_t k = heap.back();
+      heap.pop_back();
+      const uint32_t offset = uint32_t(k >> 8);
+      const uint8_t mask = uint8_t(k & 0xff);
+      ++st.block_references;
+      if (int64_t(offset) == prev_offset) {
+        if (mask != prev_mask) return corrupt("a shared block is referenced with different masks");
+        continue;
+      }
+      if (offset != prev_end) return corrupt("blocks overlap or leave a gap at offset " + std::to_string(offset));
+      const size_t bytes = F::block_bytes(mask, W);
+      if (uint64_t(offset) + bytes > stream_bytes) return corrupt("block runs past the node stream");
+      const MaskInfo& info = kMaskInfo[mask];
+      for (unsigned i = 0; i < 4; ++i) {
+        const unsigned code = F::child_code(mask, i);
+        if (code & 2u) {
+          const uint8_t* record = stream + offset + info.record_rank[i] * R;
+          const uint8_t child_mask = record[0];
+          const uint32_t target = load_offset(record + 1, W);
+          if (child_mask == 0) return corrupt("node with children has an empty mask");
+          if (uint64_t(target) < uint64_t(offset) + bytes || target >= stream_bytes)
+            return corrupt("block offset out of range or not forward");
+          heap.push_back(key(target, child_mask));
+          std::push_heap(heap.begin(), heap.end(), std::greater<>());
+          (code & 1u ? st.inner_nodes : st.empty_nodes) += 1;
+        } else if (code & 1u) {
+          st.leaf_nodes += 1;
+        }
+        if (code & 1u) {
+          if (!std::isfinite(load_f32(stream + offset + info.records * R + 4 * info.value_rank[i])))
+            return corrupt("non-finite value");
+        }
+      }
+      records += info.records;
+      values += F::valued_children(mask);
+      blocks.push_back({offset, mask});
+      prev_offset = offset;
+      prev_mask = mask;
+      prev_end = uint64_t(offset) + bytes;
+    }
+    if (prev_end != stream_bytes) return corrupt("trailing bytes after the last block");
+    if (blocks.size() != block_count || records != record_count || values != value_count)
+      return corrupt("node counts do not match the header");
+    st.blocks = blocks.size();
+
+    // Heights in reverse offset order (children lie at higher offsets): the deepest node must not
+    // go below the texel level, which bounds every walk by the level count.
+    std::vector<uint8_t> height(blocks.size(), 0);
+    for (size_t b = blocks.size(); b-- > 0;) {
+      const Block& block = blocks[b];
+      const MaskInfo& info = kMaskInfo[block.mask];
+      unsigned hb = 0;
+      for (unsigned r = 0; r < info.records; ++r) {
+        const uint32_t target = load_offset(stream + block.offset + r * R + 1, W);
+        auto it = std::lower_bound(blocks.begin() + b + 1, blocks.end(), target,
+                                   [](const Block& x, uint32_t t) { return x.offset < t; });
+        assert(it != blocks.end() && it->offset == target);  // every reference became a block
+        hb = std::max(hb, unsigned(height[it - blocks.begin()]) + 1);
+      }
+      if (hb + 1 > L) return corrupt("tree deeper than the tile's level count");
+      height[b] = uint8_t(hb);
+    }
+  } else if (block_count != 0 || record_count != 0 || value_count != 0) {
+    return corrupt("node counts do not match the header");
+  }
+
+  // Skip list: derived from the tree; an embedded one must equal it byte for byte.
+  const unsigned S = has_skip ? embedded_skip : std::min({options.skip_level, L, F::kMaxSkipLevel});
+  if (S > 0) {
+    const uint32_t side = uint32_t(1) << S;
+    view.skip_level_ = S;
+    view.skip_.resize(size_t(side) * side);
+    const uint8_t* stored = h + F::kHeaderBytes;
+    const size_t entry_bytes = F::skip_entry_bytes(W);
+    for (uint32_t y = 0; y < side; ++y) {
+      for (uint32_t x = 0; x < side; ++x) {
+        WalkState s{view.root_value_, view.root_block_, view.root_mask_};
+        const uint32_t u = x << (L - S), v = y << (L - S);
+        unsigned level = 0;
+        switch (W) {
+          case 1: level = walk<1>(view.stream_, s, 0, S, L, u, v); break;
+          case 2: level = walk<2>(view.stream_, s, 0, S, L, u, v); break;
+          case 3: level = walk<3>(view.stream_, s, 0, S, L, u, v); break;
+          default: level = walk<4>(view.stream_, s, 0, S, L, u, v); break;
+        }
+        if (level < S) s.mask = 0, s.offset = 0;  // the walk ended above S: the value decides
+        if (s.mask == 0) s.offset = 0;
+        view.skip_[size_t(y) * side + x] = s;
+        if (has_skip) {
+          const uint8_t* e = stored + (size_t(y) * side + x) * entry_bytes;
+          const float stored_value = load_f32(e);
+          if (std::memcmp(&stored_value, &s.value, 4) != 0 || e[4] != s.mask || load_offset(e + 5, W) != s.offset)
+            return corrupt("skip list does not match the tree");
+        }
+      }
+    }
+  }
+  return view;
+}
+
+MhTileView::WalkState MhTileView::start_state(uint32_t u, uint32_t v, unsigned stop, unsigned* level) const {
+  if (skip_level_ != 0 && stop >= skip_level_) {
+    const unsigned shift = levels_ - skip_level_;
+    *level = skip_level_;
+    return skip_[(size_t(v >> shift) << skip_level_) | (u >> shift)];
+  }
+  *level = 0;
+  return WalkState{root_value_, root_block_, root_mask_};
+}
+
+float MhTileView::lookup(uint32_t u, uint32_t v, unsigned max_level) const {
+  assert(u < size_ && v < size_);
+  u &= size_ - 1;
+  v &= size_ - 1;
+  const unsigned stop = std::min(max_level, levels_);
+  unsigned level;
+  WalkState s = start_state(u, v, stop, &level);
+  switch (offset_width_) {
+    case 1: walk<1>(stream_, s, level, stop, levels_, u, v); break;
+    case 2: walk<2>(stream_, s, level, stop, levels_, u, v); break;
+    case 3: walk<3>(stream_, s, level, stop, levels_, u, v); break;
+    case 4: walk<4>(stream_, s, level, stop, levels_, u, v); break;
+    default: break;  // default-constructed view: root value only
+  }
+  return s.value;
+}
+
+template <unsigned W>
+uint32_t MhTileView::pcf_count_impl(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth,
+                                    float bias) const {
+  const uint32_t u1 = u0 + kw - 1, v1 = v0 + kh - 1;
+  const unsigned L = levels_;
+  const unsigned lca = L - unsigned(std::bit_width((u0 ^ u1) | (v0 ^ v1)));
+  unsigned level;
+  WalkState s = start_state(u0, v0, lca, &level);
+  level = walk<W>(stream_, s, level, lca, L, u0, v0);
+  // The walk ended above the kernel's common ancestor (or at a leaf there): one value decides all.
+  if (level < lca || s.mask == 0) return depth <= s.value + bias ? kw * kh : 0;
+
+  WalkState path[F::kMaxLevels + 1];
+  path[lca] = s;
+  unsigned end = lca;
+  uint32_t pu = u0, pv = v0, lit = 0;
+  for (uint32_t v = v0; v <= v1; ++v) {
+    for (uint32_t u = u0; u <= u1; ++u) {
+      // Resume from the deepest node this sample shares with the previous one.
+      const unsigned shared = L - unsigned(std::bit_width((u ^ pu) | (v ^ pv)));
+      unsigned from = std::min(shared, end);
+      WalkState c = path[from];
+      while (c.mask != 0 && from < L) {
+        if (!step<W>(stream_, child_index(u, v, L - 1 - from), c)) break;
+        path[++from] = c;
+      }
+      end = from;
+      lit += depth <= c.value + bias;
+      pu = u;
+      pv = v;
+    }
+  }
+  return lit;
+}
+
+uint32_t MhTileView::pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth,
+                                   float bias) const {
+  assert(kw >= 1 && kh >= 1 && u0 < size_ && v0 < size_ && kw <= size_ - u0 && kh <= size_ - v0);
+  if (size_ == 0 || u0 >= size_ || v0 >= size_) return 0;
+  kw = std::min(kw, size_ - u0);
+  kh = std::min(kh, size_ - v0);
+  if (kw == 0 || kh == 0) return 0;
+  switch (offset_width_) {
+    case 1: return pcf_count_impl<1>(u0, v0, kw, kh, depth, bias);
+    case 2: return pcf_count_impl<2>(u0, v0, kw, kh, depth, bias);
+    case 3: return pcf_count_impl<3>(u0, v0, kw, kh, depth, bias);
+    case 4: return pcf_count_impl<4>(u0, v0, kw, kh, depth, bias);
+    default: return 0;
+  }
+}
+
+float MhTileView::pcf_lit_fraction(uint32_t u0, uint32_t v0, uint32_t k, float depth, float bias) const {
+  if (k == 0) return 0.0f;
+  return float(pcf_lit_count(u0, v0, k, k, depth, bias)) / float(uint64_t(k) * k);
+}
+
+}  // namespace shadowtiles

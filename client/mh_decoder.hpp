@@ -1,0 +1,103 @@
+// Decoder of MH / MMH tile payloads (format: client/mh_format.hpp, docs/mh.md): point lookups at
+// full or coarser resolution, PCF over a kernel inside the tile, statistics for `inspect`.
+//
+// Untrusted input: parse() validates the whole payload up front (header, every reachable block
+// inside the stream, blocks tiling the stream exactly, forward-only offsets, depth bounded by the
+// level count, finite values, header counts, embedded skip list equal to the derived one). A payload
+// that passes cannot make a lookup read out of bounds or loop; anything else is corrupt_data.
+// Validation is linear in the payload size (plus a sort of the block references).
+//
+// Lifetime: MhTileView does not own the payload bytes; they must outlive the view and stay
+// unchanged. Thread safety: a parsed view is immutable; any number of threads may look up
+// concurrently. Requires a little-endian host (checked at compile time).
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "store/result.hpp"
+
+namespace shadowtiles {
+
+inline constexpr unsigned kMhAllLevels = std::numeric_limits<unsigned>::max();
+
+struct MhParseOptions {
+  // Level of the in-memory skip list lookups start from; clamped to the tile's levels, 0 = none.
+  // Ignored when the payload embeds a skip list (that one is validated and used).
+  unsigned skip_level = 6;
+};
+
+// Counts over the stored (distinct) nodes; the root counts as a leaf or inner node.
+struct MhStats {
+  uint32_t size = 0;
+  unsigned levels = 0;
+  bool merged = false;          // payload flagged as MMH (shared blocks allowed)
+  unsigned offset_width = 0;    // bytes per block offset
+  unsigned skip_level = 0;      // embedded skip list level (0: none)
+  uint64_t payload_bytes = 0;   // header + skip list + node stream
+  uint64_t header_bytes = 0;
+  uint64_t skip_list_bytes = 0;
+  uint64_t stream_bytes = 0;
+  uint64_t blocks = 0;          // distinct child blocks
+  uint64_t inner_nodes = 0;     // value + children
+  uint64_t empty_nodes = 0;     // children only
+  uint64_t leaf_nodes = 0;      // value only
+  uint64_t block_references = 0;  // records pointing at blocks; > blocks - 1 when blocks are shared
+  uint64_t nodes() const { return inner_nodes + empty_nodes + leaf_nodes; }
+};
+
+class MhTileView {
+ public:
+  MhTileView() = default;
+
+  // Validates `payload` completely (see above). Errors: corrupt_data for any malformed, truncated
+  // or inconsistent payload; unsupported for a newer format version.
+  static Result<MhTileView> parse(std::span<const uint8_t> payload, const MhParseOptions& options = {});
+
+  uint32_t size() const { return size_; }
+  unsigned levels() const { return levels_; }
+  float root_value() const { return root_value_; }
+  const MhStats& stats() const { return stats_; }
+
+  // Shadow value for texel (u, v): the value of the deepest valued node on the path, walking at most
+  // down to level `max_level` (0 = root only; levels() or more = full resolution). Every level is a
+  // complete shadow map. Preconditions: u, v < size() (asserted; in release builds they are masked
+  // into the tile, never read out of bounds).
+  float lookup(uint32_t u, uint32_t v, unsigned max_level = kMhAllLevels) const;
+
+  // Fraction of the k x k texels [u0, u0+k) x [v0, v0+k) that are lit for a receiver at `depth`
+  // (lit: depth <= value + bias), at full resolution. Descends once to the kernel's lowest common
+  // ancestor, then per sample from the deepest node shared with the previous sample. Equal to the
+  // per-sample lookup() result. Preconditions: k >= 1, u0 + k <= size(), v0 + k <= size() (kernels
+  // crossing tiles are split by the caller); violations are asserted and clamped in release.
+  float pcf_lit_fraction(uint32_t u0, uint32_t v0, uint32_t k, float depth, float bias) const;
+
+  // Lit-sample count for the same kernel (pcf_lit_fraction = count / k^2), for callers that split a
+  // kernel across tiles.
+  uint32_t pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth, float bias) const;
+
+ private:
+  struct WalkState {
+    float value;
+    uint32_t offset;  // child block of the node, valid when mask != 0
+    uint8_t mask;     // codes of the node's children; 0 = walk ends here
+  };
+  template <unsigned W>
+  uint32_t pcf_count_impl(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth, float bias) const;
+  WalkState start_state(uint32_t u, uint32_t v, unsigned max_level, unsigned* level) const;
+
+  const uint8_t* stream_ = nullptr;
+  uint32_t size_ = 0;
+  unsigned levels_ = 0;
+  unsigned offset_width_ = 0;
+  float root_value_ = 0;
+  uint8_t root_mask_ = 0;
+  uint32_t root_block_ = 0;
+  unsigned skip_level_ = 0;        // level of skip_ (0: no skip list)
+  std::vector<WalkState> skip_;    // 4^skip_level_ entries, row-major
+  MhStats stats_;
+};
+
+}  // namespace shadowtiles

@@ -1,0 +1,88 @@
+// ShadowMap: answers "is this world point lit?" from a local store (DESIGN.md §3): world point ->
+// light space (u, v, depth) -> tile -> decoded value; lit when depth <= value + bias.
+// Tiles are fetched from LMDB, checked (header, checksum) and decoded on demand and kept in an LRU
+// cache bounded in bytes. A tile that fails its checks is an error, never an answer.
+// Points outside the map are lit and flagged; absent tiles of a complete build are empty (lit).
+// Thread safety: all methods may be called concurrently (the cache is locked; decoding runs
+// outside the lock).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <list>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+
+#include "client/decoded_tile.hpp"
+#include "client/store_meta.hpp"
+#include "store/lmdb_store.hpp"
+#include "store/tile_key.hpp"
+
+namespace shadowtiles {
+
+struct ShadowAnswer {
+  bool lit = true;
+  bool outside_map = false;  // the point projects outside the map: lit by definition
+  bool empty_tile = false;   // its tile holds no geometry: lit
+  float value = 0;           // shadow value used (depth units)
+  LightSpacePoint light;     // the point in light space
+};
+
+struct CacheStats {
+  uint64_t hits = 0;
+  uint64_t misses = 0;
+  uint64_t bytes = 0;
+  uint64_t tiles = 0;
+};
+
+class ShadowMap {
+ public:
+  struct Options {
+    size_t cache_bytes = size_t(256) << 20;
+  };
+  // Opens `store_dir` read-only and validates its meta. Errors: not_found, corrupt_data, unsupported,
+  // invalid_input when the build is incomplete (absent tiles would be ambiguous).
+  static Result<std::unique_ptr<ShadowMap>> open(const std::filesystem::path& store_dir, Options options);
+  static Result<std::unique_ptr<ShadowMap>> open(const std::filesystem::path& store_dir) {
+    return open(store_dir, Options{});
+  }
+
+  const StoreMeta& meta() const { return meta_; }
+  const LightFrame& frame() const { return frame_; }
+  const TileLayout& layout() const { return layout_; }
+  // The first method of the build, used when a query names none.
+  store::Method default_method() const { return meta_.methods.front(); }
+
+  // Value at global texel (u, v) < resolution. Errors: unsupported method, corrupt tile, I/O.
+  Result<float> texel_value(store::Method method, uint32_t u, uint32_t v, unsigned max_level = 255) const;
+  // Decoded tile, nullptr for an empty tile. Errors as texel_value.
+  Result<std::shared_ptr<const DecodedTile>> tile(store::Method method, TileCoord tile) const;
+  // Point query; `bias` in world units (default: the build's).
+  Result<ShadowAnswer> query(const Vec3& world, store::Method method, std::optional<double> bias = {}) const;
+
+  CacheStats cache_stats() const;
+
+ private:
+  ShadowMap(std::unique_ptr<store::Store> store, StoreMeta meta, LightFrame frame, TileLayout layout, Options options)
+      : store_(std::move(store)), meta_(std::move(meta)), frame_(frame), layout_(layout), options_(options) {}
+
+  std::unique_ptr<store::Store> store_;
+  StoreMeta meta_;
+  LightFrame frame_;
+  TileLayout layout_;
+  Options options_;
+
+  struct CacheEntry {
+    std::shared_ptr<const DecodedTile> tile;  // nullptr: empty tile
+    size_t bytes = 0;
+    std::list<store::TileKey>::iterator lru;
+  };
+  mutable std::mutex cache_mutex_;
+  mutable std::map<store::TileKey, CacheEntry> cache_;
+  mutable std::list<store::TileKey> lru_;  // front = most recent
+  mutable CacheStats stats_;
+};
+
+}  // namespace shadowtiles

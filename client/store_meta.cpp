@@ -1,0 +1,154 @@
+#include "client/store_meta.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace shadowtiles {
+namespace {
+
+nlohmann::json vec_json(const Vec3& v) { return nlohmann::json::array({v[0], v[1], v[2]}); }
+
+Result<Vec3> vec_from(const nlohmann::json& json, const char* name) {
+  if (!json.contains(name) || !json[name].is_array() || json[name].size() != 3)
+    return make_error(ErrorCode::corrupt_data, std::string("meta: '") + name + "' must be an array of 3 numbers");
+  Vec3 v;
+  for (int i = 0; i < 3; ++i) {
+    if (!json[name][i].is_number())
+      return make_error(ErrorCode::corrupt_data, std::string("meta: '") + name + "' must hold numbers");
+    v[i] = json[name][i].get<double>();
+    if (!std::isfinite(v[i])) return make_error(ErrorCode::corrupt_data, std::string("meta: '") + name + "' not finite");
+  }
+  return v;
+}
+
+template <class T>
+Result<T> field(const nlohmann::json& json, const char* name) {
+  if (!json.contains(name)) return make_error(ErrorCode::corrupt_data, std::string("meta: missing '") + name + "'");
+  try {
+    return json.at(name).get<T>();
+  } catch (const nlohmann::json::exception& e) {
+    return make_error(ErrorCode::corrupt_data, std::string("meta: bad '") + name + "': " + e.what());
+  }
+}
+
+}  // namespace
+
+Result<LightFrame> StoreMeta::light_frame() const {
+  return LightFrame::from_parameters(light_direction, light_origin, light_extent, light_depth_range, resolution);
+}
+
+Result<TileLayout> StoreMeta::layout() const { return TileLayout::make(resolution, tile_size); }
+
+bool StoreMeta::has_method(store::Method method) const {
+  return std::find(methods.begin(), methods.end(), method) != methods.end();
+}
+
+nlohmann::json StoreMeta::to_json() const {
+  nlohmann::json methods_json = nlohmann::json::array();
+  for (store::Method m : methods) methods_json.push_back(store::method_name(m));
+  return {
+      {"format_version", format_version},
+      {"builder_version", builder_version},
+      {"config_hash", config_hash},
+      {"complete", complete},
+      {"scene", {{"path", scene_path}, {"triangles", scene_triangles},
+                 {"bounds_min", vec_json(scene_bounds.min)}, {"bounds_max", vec_json(scene_bounds.max)}}},
+      {"light", {{"direction", vec_json(light_direction)}, {"origin", vec_json(light_origin)},
+                 {"extent", light_extent}, {"depth_range", light_depth_range}}},
+      {"resolution", resolution},
+      {"tile_size", tile_size},
+      {"methods", methods_json},
+      {"default_bias", default_bias},
+      {"exit_margin", exit_margin},
+      {"build_stats", build_stats},
+  };
+}
+
+Result<StoreMeta> StoreMeta::from_json(const nlohmann::json& json) {
+  if (!json.is_object()) return make_error(ErrorCode::corrupt_data, "meta: not a JSON object");
+  StoreMeta meta;
+  auto version = field<int>(json, "format_version");
+  if (!version) return version.error();
+  if (*version != kStoreFormatVersion)
+    return make_error(ErrorCode::unsupported, "store format version " + std::to_string(*version) +
+                                                  " is not supported (this build reads " +
+                                                  std::to_string(kStoreFormatVersion) + ")");
+  meta.format_version = *version;
+  auto builder = field<std::string>(json, "builder_version");
+  auto hash = field<std::string>(json, "config_hash");
+  auto complete = field<bool>(json, "complete");
+  auto resolution = field<uint32_t>(json, "resolution");
+  auto tile_size = field<uint32_t>(json, "tile_size");
+  auto bias = field<double>(json, "default_bias");
+  auto margin = field<double>(json, "exit_margin");
+  for (const Error* e : {builder.ok() ? nullptr : &builder.error(), hash.ok() ? nullptr : &hash.error(),
+                         complete.ok() ? nullptr : &complete.error(), resolution.ok() ? nullptr : &resolution.error(),
+                         tile_size.ok() ? nullptr : &tile_size.error(), bias.ok() ? nullptr : &bias.error(),
+                         margin.ok() ? nullptr : &margin.error()})
+    if (e) return *e;
+  meta.builder_version = *builder;
+  meta.config_hash = *hash;
+  meta.complete = *complete;
+  meta.resolution = *resolution;
+  meta.tile_size = *tile_size;
+  meta.default_bias = *bias;
+  meta.exit_margin = *margin;
+  if (!std::isfinite(meta.default_bias) || meta.default_bias < 0)
+    return make_error(ErrorCode::corrupt_data, "meta: default_bias must be finite and >= 0");
+
+  if (!json.contains("scene") || !json["scene"].is_object())
+    return make_error(ErrorCode::corrupt_data, "meta: missing 'scene'");
+  const auto& scene = json["scene"];
+  auto path = field<std::string>(scene, "path");
+  auto triangles = field<uint64_t>(scene, "triangles");
+  auto bmin = vec_from(scene, "bounds_min");
+  auto bmax = vec_from(scene, "bounds_max");
+  if (!path) return path.error();
+  if (!triangles) return triangles.error();
+  if (!bmin) return bmin.error();
+  if (!bmax) return bmax.error();
+  meta.scene_path = *path;
+  meta.scene_triangles = *triangles;
+  meta.scene_bounds = {*bmin, *bmax};
+
+  if (!json.contains("light") || !json["light"].is_object())
+    return make_error(ErrorCode::corrupt_data, "meta: missing 'light'");
+  const auto& light = json["light"];
+  auto direction = vec_from(light, "direction");
+  auto origin = vec_from(light, "origin");
+  auto extent = field<double>(light, "extent");
+  auto depth_range = field<double>(light, "depth_range");
+  if (!direction) return direction.error();
+  if (!origin) return origin.error();
+  if (!extent) return extent.error();
+  if (!depth_range) return depth_range.error();
+  meta.light_direction = *direction;
+  meta.light_origin = *origin;
+  meta.light_extent = *extent;
+  meta.light_depth_range = *depth_range;
+
+  if (!json.contains("methods") || !json["methods"].is_array())
+    return make_error(ErrorCode::corrupt_data, "meta: 'methods' must be an array");
+  for (const auto& name : json["methods"]) {
+    if (!name.is_string()) return make_error(ErrorCode::corrupt_data, "meta: method names must be strings");
+    auto method = store::parse_method(name.get<std::string>());
+    if (!method) return make_error(ErrorCode::unsupported, "meta: " + method.error().message);
+    meta.methods.push_back(*method);
+  }
+  if (json.contains("build_stats")) meta.build_stats = json["build_stats"];
+
+  // The frame and layout must be constructible, or every lookup would fail later.
+  if (auto frame = meta.light_frame(); !frame)
+    return make_error(ErrorCode::corrupt_data, "meta: " + frame.error().message);
+  if (auto layout = meta.layout(); !layout)
+    return make_error(ErrorCode::corrupt_data, "meta: " + layout.error().message);
+  return meta;
+}
+
+Result<StoreMeta> StoreMeta::parse(std::string_view text) {
+  nlohmann::json json = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (json.is_discarded()) return make_error(ErrorCode::corrupt_data, "meta: not valid JSON");
+  return from_json(json);
+}
+
+}  // namespace shadowtiles

@@ -1,0 +1,55 @@
+// StoreMeta: the `meta` record of a store (JSON in the LMDB `meta` database under key "build"),
+// everything a reader needs to turn a world point into a tile lookup: the light frame, the map
+// and tile sizes, the methods present, the default query bias and whether the build completed.
+// Parsing validates every field: the record comes from disk and is treated as untrusted.
+// Thread safety: plain value type.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "client/light_frame.hpp"
+#include "client/tile_layout.hpp"
+#include "store/method.hpp"
+#include "store/result.hpp"
+
+namespace shadowtiles {
+
+// FORMAT: bump when the meta record or any tile payload changes incompatibly.
+constexpr int kStoreFormatVersion = 1;
+constexpr const char* kMetaBuildKey = "build";
+
+struct StoreMeta {
+  int format_version = kStoreFormatVersion;
+  std::string builder_version;
+  std::string config_hash;  // hex; a resumed build must match it
+  bool complete = false;    // all tiles committed; absent tiles are then known empty
+
+  std::string scene_path;
+  uint64_t scene_triangles = 0;
+  WorldBounds scene_bounds;
+
+  Vec3 light_direction{0, 0, -1};
+  Vec3 light_origin{0, 0, 0};
+  double light_extent = 1;
+  double light_depth_range = 1;
+  uint32_t resolution = 1;
+  uint32_t tile_size = 1;
+  std::vector<store::Method> methods;
+  double default_bias = 0;  // world units
+  double exit_margin = 0;   // world units the builder pulled exits back by
+  nlohmann::json build_stats = nlohmann::json::object();
+
+  Result<LightFrame> light_frame() const;
+  Result<TileLayout> layout() const;
+  bool has_method(store::Method method) const;
+
+  nlohmann::json to_json() const;
+  static Result<StoreMeta> from_json(const nlohmann::json& json);
+  static Result<StoreMeta> parse(std::string_view text);
+};
+
+}  // namespace shadowtiles

@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Installs every Debian package shadowtiles needs to build, test and run (Debian 12, as root).
+set -euo pipefail
+packages=(
+  cmake ninja-build g++ pkg-config
+  libembree-dev            # ray casting (Embree 3)
+  libassimp-dev            # scene loading: OBJ, PLY, glTF/GLB, FBX, DAE, IFC, TER...
+  assimp-testmodels        # the bundled default scene (a terrain) and test models
+  liblmdb-dev lmdb-utils   # the out-of-core tile store
+  libzstd-dev libxxhash-dev
+  libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcpp-httplib-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  SUDO=""
+  [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
