@@ -1,5 +1,7 @@
 #include "client/shadow_map.hpp"
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "store/blob.hpp"
@@ -87,12 +89,83 @@ Result<float> ShadowMap::texel_value(store::Method method, uint32_t u, uint32_t 
   return (*decoded)->value(u % size, v % size, max_level);
 }
 
-Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, std::optional<double> bias) const {
+unsigned ShadowMap::level_count() const { return unsigned(std::countr_zero(layout_.resolution())) + 1; }
+
+namespace {
+
+Status check_query(const Vec3& world, double bias_world) {
   for (double c : world)
     if (!std::isfinite(c)) return make_error(ErrorCode::invalid_input, "point coordinates must be finite");
-  double bias_world = bias.value_or(meta_.default_bias);
   if (!std::isfinite(bias_world) || bias_world < 0)
     return make_error(ErrorCode::invalid_input, "bias must be finite and >= 0");
+  return {};
+}
+
+}  // namespace
+
+Result<unsigned> ShadowMap::tile_max_level(std::optional<unsigned> level) const {
+  if (!level) return 255u;
+  if (*level >= level_count())
+    return make_error(ErrorCode::invalid_input, "level must be in [0, " + std::to_string(level_count() - 1) + "]");
+  // Levels above the tile level are served by the tile roots until the top levels are stored.
+  return *level > layout_.tile_level() ? *level - layout_.tile_level() : 0u;
+}
+
+Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, unsigned kernel,
+                                    std::optional<double> bias, std::optional<unsigned> level,
+                                    ShadowAnswer* answer_out) const {
+  if (kernel == 0 || kernel % 2 == 0 || kernel > kMaxPcfKernel)
+    return make_error(ErrorCode::invalid_input,
+                      "pcf kernel must be odd and in [1, " + std::to_string(kMaxPcfKernel) + "]");
+  double bias_world = bias.value_or(meta_.default_bias);
+  if (Status s = check_query(world, bias_world); !s) return s.error();
+  auto max_level = tile_max_level(level);
+  if (!max_level) return max_level.error();
+  ShadowAnswer answer;
+  answer.light = frame_.to_light(world);
+  const double resolution = layout_.resolution();
+  if (!(answer.light.u >= 0 && answer.light.u < resolution && answer.light.v >= 0 && answer.light.v < resolution)) {
+    answer.outside_map = true;
+    answer.value = std::numeric_limits<float>::infinity();
+    if (answer_out) *answer_out = answer;
+    return 1.0;
+  }
+  const int64_t cu = int64_t(answer.light.u), cv = int64_t(answer.light.v), half = kernel / 2;
+  const double threshold = answer.light.depth - frame_.depth_from_world(bias_world);
+  const uint32_t size = layout_.tile_size();
+  const int64_t side = int64_t(layout_.resolution());
+  uint64_t lit = 0;
+  // Samples grouped by tile: each tile is fetched once per kernel.
+  for (int64_t v = cv - half; v <= cv + half; ++v) {
+    for (int64_t u = cu - half; u <= cu + half;) {
+      if (u < 0 || v < 0 || u >= side || v >= side) { ++lit; ++u; continue; }
+      TileCoord coord{uint32_t(u / size), uint32_t(v / size)};
+      int64_t run_end = std::min<int64_t>(cu + half, int64_t(coord.x + 1) * size - 1);
+      auto decoded = tile(method, coord);
+      if (!decoded) return decoded.error();
+      for (; u <= run_end; ++u) {
+        float value = *decoded ? (*decoded)->value(uint32_t(u) % size, uint32_t(v) % size, *max_level)
+                               : std::numeric_limits<float>::infinity();
+        if (u == cu && v == cv) {
+          answer.value = value;
+          answer.empty_tile = !*decoded;
+        }
+        lit += threshold <= double(value);
+      }
+    }
+  }
+  double fraction = double(lit) / double(kernel * kernel);
+  answer.lit = fraction > 0.5;
+  if (answer_out) *answer_out = answer;
+  return fraction;
+}
+
+Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, std::optional<double> bias,
+                                      std::optional<unsigned> level) const {
+  double bias_world = bias.value_or(meta_.default_bias);
+  if (Status s = check_query(world, bias_world); !s) return s.error();
+  auto max_level = tile_max_level(level);
+  if (!max_level) return max_level.error();
   ShadowAnswer answer;
   answer.light = frame_.to_light(world);
   const double resolution = layout_.resolution();
@@ -110,8 +183,9 @@ Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, s
     answer.value = std::numeric_limits<float>::infinity();
     return answer;
   }
-  answer.value = (*decoded)->value(u % size, v % size);
-  answer.lit = answer.light.depth <= double(answer.value) + frame_.depth_from_world(bias_world);
+  answer.value = (*decoded)->value(u % size, v % size, *max_level);
+  // Same comparison as query_pcf, so a 1x1 kernel equals a point query exactly.
+  answer.lit = answer.light.depth - frame_.depth_from_world(bias_world) <= double(answer.value);
   return answer;
 }
 

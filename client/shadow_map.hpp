@@ -59,14 +59,28 @@ class ShadowMap {
   Result<float> texel_value(store::Method method, uint32_t u, uint32_t v, unsigned max_level = 255) const;
   // Decoded tile, nullptr for an empty tile. Errors as texel_value.
   Result<std::shared_ptr<const DecodedTile>> tile(store::Method method, TileCoord tile) const;
-  // Point query; `bias` in world units (default: the build's).
-  Result<ShadowAnswer> query(const Vec3& world, store::Method method, std::optional<double> bias = {}) const;
+  // Point query; `bias` in world units (default: the build's). `level`: level of detail counted from
+  // the whole map's root (0) to the finest texels (log2 resolution, the default); coarser levels of
+  // hierarchical methods stop the descent early (every level is a complete shadow map).
+  Result<ShadowAnswer> query(const Vec3& world, store::Method method, std::optional<double> bias = {},
+                             std::optional<unsigned> level = {}) const;
+  // Percentage-closer filtering: the lit fraction of the k x k texels centred on the point's texel
+  // (k odd, 1..kMaxPcfKernel), each compared with the point's depth. Kernels crossing tile borders
+  // read the neighbour tiles; samples outside the map are lit. `answer.lit` is fraction > 0.5.
+  static constexpr unsigned kMaxPcfKernel = 63;
+  Result<double> query_pcf(const Vec3& world, store::Method method, unsigned kernel, std::optional<double> bias = {},
+                           std::optional<unsigned> level = {}, ShadowAnswer* answer = nullptr) const;
+  // Levels of the whole map: log2(resolution) + 1.
+  unsigned level_count() const;
 
   CacheStats cache_stats() const;
 
  private:
   ShadowMap(std::unique_ptr<store::Store> store, StoreMeta meta, LightFrame frame, TileLayout layout, Options options)
       : store_(std::move(store)), meta_(std::move(meta)), frame_(frame), layout_(layout), options_(options) {}
+
+  // Query level -> max level inside a tile tree (255 = finest).
+  Result<unsigned> tile_max_level(std::optional<unsigned> level) const;
 
   std::unique_ptr<store::Store> store_;
   StoreMeta meta_;
