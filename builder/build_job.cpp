@@ -168,6 +168,7 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   meta.config_hash = config_hash;
   meta.scene_path = config.scene_path.string();
   meta.scene_triangles = scene->triangle_count();
+  meta.heightfield_meshes = config.load.heightfield_meshes;
   meta.scene_bounds = scene->bounds;
   meta.light_direction = frame->direction();
   meta.light_origin = frame->origin();
@@ -316,6 +317,9 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
                  {"meshes", load_stats.meshes}, {"closed_meshes", load_stats.closed_meshes}}},
       {"rays", summary.rays},
       {"rays_per_second", render_wall > 0 ? double(summary.rays) / render_wall : 0.0},
+      // Ray casting alone (BVH build excluded), per worker thread.
+      {"rays_per_thread_second",
+       totals.depth.ray_seconds > 0 ? double(summary.rays) / totals.depth.ray_seconds : 0.0},
       {"threads", thread_count},
       {"seconds", {{"load", load_stats.seconds}, {"index", index_seconds},
                    {"bvh_thread_sum", totals.depth.bvh_seconds}, {"rays_thread_sum", totals.depth.ray_seconds},

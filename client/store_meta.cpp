@@ -51,7 +51,7 @@ nlohmann::json StoreMeta::to_json() const {
       {"builder_version", builder_version},
       {"config_hash", config_hash},
       {"complete", complete},
-      {"scene", {{"path", scene_path}, {"triangles", scene_triangles},
+      {"scene", {{"path", scene_path}, {"triangles", scene_triangles}, {"heightfield_meshes", heightfield_meshes},
                  {"bounds_min", vec_json(scene_bounds.min)}, {"bounds_max", vec_json(scene_bounds.max)}}},
       {"light", {{"direction", vec_json(light_direction)}, {"origin", vec_json(light_origin)},
                  {"extent", light_extent}, {"depth_range", light_depth_range}}},
@@ -110,6 +110,11 @@ Result<StoreMeta> StoreMeta::from_json(const nlohmann::json& json) {
   meta.scene_path = *path;
   meta.scene_triangles = *triangles;
   meta.scene_bounds = {*bmin, *bmax};
+  if (scene.contains("heightfield_meshes")) {
+    auto names = field<std::vector<std::string>>(scene, "heightfield_meshes");
+    if (!names) return names.error();
+    meta.heightfield_meshes = *names;
+  }
 
   if (!json.contains("light") || !json["light"].is_object())
     return make_error(ErrorCode::corrupt_data, "meta: missing 'light'");

@@ -29,6 +29,7 @@ struct StoreMeta {
   bool complete = false;    // all tiles committed; absent tiles are then known empty
 
   std::string scene_path;
+  std::vector<std::string> heightfield_meshes;  // as given to the build (verify reloads with them)
   uint64_t scene_triangles = 0;
   WorldBounds scene_bounds;
 

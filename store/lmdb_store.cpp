@@ -366,6 +366,7 @@ Status Store::write(std::span<const Put> puts, std::span<const Delete> deletes) 
   for (const Delete& del : deletes) {
     if (Status status = check_key(del.key); !status) return status;
   }
+  if (puts.empty() && deletes.empty() && mode_ == Mode::read_write) return Status::success();
   return run_write("write", [&](MDB_txn* txn) {
     for (const Put& put : puts) {
       MDB_val k = to_val(put.key);
