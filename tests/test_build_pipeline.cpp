@@ -11,6 +11,7 @@
 #include "builder/ground_truth.hpp"
 #include "builder/receiver_sampler.hpp"
 #include "builder/scene_loader.hpp"
+#include "client/raw_tile.hpp"
 #include "client/shadow_map.hpp"
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
@@ -180,6 +181,51 @@ TEST(EndToEnd, CorruptBlobIsAnErrorNeverAnAnswer) {
                                       " --point 0,0.1,0",
                                   &output);
   EXPECT_EQ(code, 4) << output;
+}
+
+TEST(EndToEnd, VerifyPassesOnAGoodStoreAndCatchesAWrongValue) {
+  TempDir dir;
+  std::string scene = testing::shared_scene("nefertiti/nefertiti.obj").string();
+  auto config = config_for(scene, dir.path() / "s", 512, 256, UpAxis::z);
+  ASSERT_TRUE(run_build(config).ok());
+  std::string verify = testing::cli_path().string() + " verify " + (dir.path() / "s").string() + " -q --json";
+  std::string output;
+  ASSERT_EQ(testing::run_command(verify, &output), 0) << output;
+  auto report = nlohmann::json::parse(output.substr(output.find('{')));
+  EXPECT_EQ(report["raw"]["texels"].get<uint64_t>(), 512u * 512u);
+  EXPECT_EQ(report["raw"]["outside"].get<uint64_t>(), 0u);
+
+  // A well-formed blob (valid checksum) whose values lie behind the geometry: verify must catch it.
+  {
+    auto store = store::Store::open(dir.path() / "s", {store::Store::Mode::read_write});
+    ASSERT_TRUE(store.ok());
+    std::optional<std::pair<std::vector<uint8_t>, std::vector<uint8_t>>> first;
+    ASSERT_TRUE((*store)->for_each(store::Database::tiles, {}, [&](auto key, auto value) {
+      first.emplace(std::vector<uint8_t>(key.begin(), key.end()), std::vector<uint8_t>(value.begin(), value.end()));
+      return false;
+    }).ok());
+    ASSERT_TRUE(first.has_value());
+    auto payload = store::decode_blob(first->second);
+    ASSERT_TRUE(payload.ok());
+    auto view = RawTileView::parse(*payload);
+    ASSERT_TRUE(view.ok());
+    std::vector<float> values(size_t(view->size()) * view->size());
+    int moved = 0;
+    for (uint32_t v = 0; v < view->size(); ++v)
+      for (uint32_t u = 0; u < view->size(); ++u) {
+        float x = view->value(u, v);
+        if (x < 1.0f && moved < 3) { x = 0.999f; ++moved; }
+        values[size_t(v) * view->size() + u] = x;
+      }
+    ASSERT_EQ(moved, 3);
+    auto blob = store::encode_blob(store::Method::raw, encode_raw_tile(view->size(), values));
+    std::vector<store::Store::Put> puts{{store::Database::tiles, first->first, blob}};
+    ASSERT_TRUE((*store)->write(puts).ok());
+  }
+  output.clear();
+  EXPECT_EQ(testing::run_command(verify, &output), 3) << output;
+  report = nlohmann::json::parse(output.substr(output.find('{')));
+  EXPECT_EQ(report["raw"]["outside"].get<uint64_t>(), 3u);
 }
 
 TEST(Cli, MalformedSceneExitsTwoNamingTheFile) {
