@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <cstring>
 #include <cstdio>
 #include <mutex>
 #include <set>
@@ -17,6 +18,8 @@
 #include "builder/dual_depth_renderer.hpp"
 #include "builder/file_hash.hpp"
 #include "builder/light_space_scene.hpp"
+#include "builder/mh_encoder.hpp"
+#include "builder/mmh_merger.hpp"
 #include "builder/tile_encoder.hpp"
 #include "client/store_meta.hpp"
 #include "store/blob.hpp"
@@ -92,7 +95,8 @@ nlohmann::json build_identity(const BuildConfig& config, uint64_t scene_hash, ui
           {"heightfield", config.load.heightfield_meshes},
           {"bias_texels", config.bias_texels},
           {"exit_margin_texels", config.exit_margin_texels},
-          {"zstd_level", config.zstd_level}};
+          {"zstd_level", config.zstd_level},
+          {"construction", config.construction == MhConstruction::top_down ? "top_down" : "bottom_up"}};
 }
 
 struct WorkerTotals {
@@ -103,7 +107,32 @@ struct WorkerTotals {
   uint64_t blob_bytes = 0;
   std::map<std::string, uint64_t> bytes_by_method;
   std::map<std::string, uint64_t> raw_bytes_by_method;
+  std::map<std::string, uint64_t> reference_bytes_by_method;
+  std::map<std::string, double> encode_seconds_by_method;
 };
+
+// Progress record of a committed tile: whether it stored blobs, and its root interval (the top
+// levels are built from all tiles' roots, including tiles committed by an earlier run).
+std::vector<uint8_t> progress_value(bool stored, DepthInterval root) {
+  std::vector<uint8_t> value(9);
+  value[0] = stored ? 1 : 0;
+  std::memcpy(value.data() + 1, &root.lower, 4);
+  std::memcpy(value.data() + 5, &root.upper, 4);
+  return value;
+}
+
+DepthInterval progress_root(std::span<const uint8_t> value) {
+  DepthInterval root;  // miss
+  if (value.size() == 9) {
+    std::memcpy(&root.lower, value.data() + 1, 4);
+    std::memcpy(&root.upper, value.data() + 5, 4);
+  }
+  return root;
+}
+
+bool is_hierarchical(store::Method method) {
+  return method == store::Method::mh || method == store::Method::mmh;
+}
 
 }  // namespace
 
@@ -183,10 +212,10 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   // Index: which tiles have triangles; which are done already.
   auto index_start = Clock::now();
   LightSpaceScene light_scene(*scene, *frame, *layout);
-  std::set<TileCoord> done;
+  std::map<TileCoord, DepthInterval> done;  // committed tiles and their root intervals
   if (Status s = db.for_each(store::Database::progress, {},
-                             [&](std::span<const uint8_t> key, std::span<const uint8_t>) {
-                               if (key.size() == 8) done.insert(progress_tile(key));
+                             [&](std::span<const uint8_t> key, std::span<const uint8_t> value) {
+                               if (key.size() == 8) done[progress_tile(key)] = progress_root(value);
                                return true;
                              });
       !s)
@@ -215,6 +244,8 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   DualDepthOptions depth_options;
   depth_options.exit_margin = float(frame->depth_from_world(meta.exit_margin));
   DualDepthRenderer renderer(*device, light_scene, depth_options);
+  TileEncodeOptions encode_options;
+  encode_options.construction = config.construction;
 
   // Workers: render, encode, commit, one tile at a time each.
   auto render_start = Clock::now();
@@ -224,6 +255,7 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   std::atomic<bool> failed{false};
   std::mutex totals_mutex;
   WorkerTotals totals;
+  std::map<TileCoord, DepthInterval> roots = done;  // guarded by totals_mutex
   std::optional<Error> first_error;
   auto fail = [&](Error error) {
     std::lock_guard lock(totals_mutex);
@@ -245,25 +277,35 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
       auto encode_start = Clock::now();
       std::vector<store::Store::Put> puts;
       bool empty = intervals->all_missed();
+      DepthInterval root;  // an empty tile's root is a miss: lit
       if (!empty) {
-        for (store::Method method : config.methods) {
-          auto payload = encode_tile_payload(method, *intervals);
-          if (!payload) { fail(payload.error()); return; }
-          auto blob = store::encode_blob(method, *payload, 0, config.zstd_level);
+        auto encoding = encode_tile(config.methods, *intervals, encode_options);
+        if (!encoding) { fail(encoding.error()); break; }
+        if (encoding->has_root) root = encoding->root;
+        for (EncodedPayload& encoded : encoding->payloads) {
+          auto blob_start = Clock::now();
+          auto blob = store::encode_blob(encoded.method, encoded.payload, 0, config.zstd_level);
+          const char* name = store::method_name(encoded.method);
+          mine.encode_seconds_by_method[name] += encoded.seconds + seconds_since(blob_start);
           mine.blob_bytes += blob.size();
-          mine.bytes_by_method[store::method_name(method)] += blob.size();
-          mine.raw_bytes_by_method[store::method_name(method)] += payload->size();
-          auto key = store::encode_tile_key({method, layout->tile_level(), tile.x, tile.y});
+          mine.bytes_by_method[name] += blob.size();
+          mine.raw_bytes_by_method[name] += encoded.payload.size();
+          mine.reference_bytes_by_method[name] += encoded.reference_bytes;
+          auto key = store::encode_tile_key({encoded.method, layout->tile_level(), tile.x, tile.y});
           puts.push_back({store::Database::tiles, {key.begin(), key.end()}, std::move(blob)});
         }
         ++mine.stored_tiles;
       }
-      puts.push_back({store::Database::progress, progress_key(tile), {uint8_t(empty ? 0 : 1)}});
+      puts.push_back({store::Database::progress, progress_key(tile), progress_value(!empty, root)});
       mine.encode_seconds += seconds_since(encode_start);
 
       auto store_start = Clock::now();
       if (Status s = db.write(puts); !s) { fail(s.error()); break; }
       mine.store_seconds += seconds_since(store_start);
+      {
+        std::lock_guard lock(totals_mutex);
+        roots[tile] = root;
+      }
       uint64_t count = ++committed;
       if (config.debug_kill_after_tiles && count >= config.debug_kill_after_tiles) std::raise(SIGKILL);
     }
@@ -275,6 +317,8 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
     totals.blob_bytes += mine.blob_bytes;
     for (auto& [k, v] : mine.bytes_by_method) totals.bytes_by_method[k] += v;
     for (auto& [k, v] : mine.raw_bytes_by_method) totals.raw_bytes_by_method[k] += v;
+    for (auto& [k, v] : mine.reference_bytes_by_method) totals.reference_bytes_by_method[k] += v;
+    for (auto& [k, v] : mine.encode_seconds_by_method) totals.encode_seconds_by_method[k] += v;
   };
   std::vector<std::thread> threads;
   unsigned thread_count = std::min<unsigned>(config.threads, std::max<size_t>(todo.size(), 1));
@@ -300,6 +344,39 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   if (first_error) return *first_error;
   double render_wall = seconds_since(render_start);
 
+  // Top levels: the tiles' root intervals form a coarse map, itself compressed as an MH per
+  // hierarchical method, with the skip list embedded (served as /v1/skiplist).
+  auto top_start = Clock::now();
+  nlohmann::json top_bytes = nlohmann::json::object();
+  {
+    TileIntervals grid;
+    grid.size = layout->tiles_per_side();
+    grid.texels.assign(size_t(grid.size) * grid.size, DepthInterval{});
+    for (const auto& [tile, root] : roots) grid.at(tile.x, tile.y) = root;
+    std::vector<store::Store::Put> puts;
+    for (store::Method method : config.methods) {
+      if (!is_hierarchical(method)) continue;
+      auto top = build_mh(grid);
+      if (!top) return top.error();
+      if (method == store::Method::mmh) {
+        auto merged = merge_mmh(*top);
+        if (!merged) return merged.error();
+        top = std::move(merged);
+      }
+      MhEncodeOptions top_options;
+      top_options.embed_skip_list = true;
+      top_options.skip_level = std::min<unsigned>(6, layout->tile_level());
+      auto payload = encode_mh(*top, top_options);
+      if (!payload) return payload.error();
+      auto blob = store::encode_blob(method, *payload, 0, config.zstd_level);
+      top_bytes[store::method_name(method)] = blob.size();
+      puts.push_back({store::Database::top, bytes_of(top_tree_key(method)), std::move(blob)});
+    }
+    if (!puts.empty())
+      if (Status s = db.write(puts); !s) return s.error();
+  }
+  double top_seconds = seconds_since(top_start);
+
   // Finish: meta marked complete with the stats, then one forced sync.
   BuildSummary summary;
   summary.tiles_total = layout->tile_count();
@@ -324,8 +401,12 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
       {"seconds", {{"load", load_stats.seconds}, {"index", index_seconds},
                    {"bvh_thread_sum", totals.depth.bvh_seconds}, {"rays_thread_sum", totals.depth.ray_seconds},
                    {"encode_thread_sum", totals.encode_seconds}, {"store_thread_sum", totals.store_seconds},
-                   {"render_wall", render_wall}, {"total", seconds_since(total_start)}}},
+                   {"render_wall", render_wall}, {"top_levels", top_seconds},
+                   {"total", seconds_since(total_start)}}},
       {"bytes_by_method", bytes},
+      {"top_bytes_by_method", top_bytes},
+      {"reference_bytes_by_method", totals.reference_bytes_by_method},
+      {"encode_seconds_by_method", totals.encode_seconds_by_method},
       {"payload_bytes_by_method", raw_bytes},
       {"peak_memory_mib", peak_memory_mib()},
   };

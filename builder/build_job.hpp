@@ -20,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "builder/mh_builder.hpp"
 #include "builder/scene_loader.hpp"
 #include "client/light_frame.hpp"
 #include "store/method.hpp"
@@ -40,6 +41,7 @@ struct BuildConfig {
   double bias_texels = 2.0;         // default query bias, in texel widths (stored in world units)
   double exit_margin_texels = 4.0;  // closed-mesh exits pulled back by this (>= the bias)
   int zstd_level = 3;
+  MhConstruction construction = MhConstruction::bottom_up;  // MH family: bottom-up or top-down
   uint64_t initial_map_size = 1ull << 30;
   bool overwrite = false;
   // Progress callback, called from the coordinating thread about once a second.

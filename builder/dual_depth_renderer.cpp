@@ -20,11 +20,14 @@ struct ClosedHit {
   float t;
   uint32_t prim;
   bool front;
+  bool heightfield;
 };
 
-// Per-geometry data the filter needs: which closed triangles face the light.
+// Per-geometry data the filter needs: which solid-bounding triangles face the light, and which
+// belong to heightfields (solids closed by the far plane).
 struct ClosedGeometryData {
   std::vector<uint8_t> front;
+  std::vector<uint8_t> heightfield;
 };
 
 // Intersect context extended with per-lane hit lists: the filter sees ray ids, not lanes.
@@ -43,15 +46,15 @@ void collect_closed_hits(const RTCFilterFunctionNArguments* args) {
     unsigned lane = RTCRayN_id(args->ray, args->N, i);
     float t = RTCRayN_tfar(args->ray, args->N, i);
     uint32_t prim = RTCHitN_primID(args->hit, args->N, i);
-    (*context->lanes)[lane % kPacket].push_back({t, prim, data->front[prim] != 0});
+    (*context->lanes)[lane % kPacket].push_back({t, prim, data->front[prim] != 0, data->heightfield[prim] != 0});
     args->valid[i] = 0;
   }
 }
 
 struct TileGeometry {
   std::vector<float> closed_vertices, open_vertices;    // xyz per vertex, 3 vertices per triangle
-  ClosedGeometryData closed;
-  std::vector<uint8_t> open_is_heightfield;
+  ClosedGeometryData closed;                            // closed meshes and heightfields
+  size_t open_count = 0;
 };
 
 // Front-facing toward the light: counter-clockwise seen from the light, i.e. the normal's depth
@@ -77,16 +80,17 @@ TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile) 
     const LightSpacePoint& b = scene.vertex(tri[1]);
     const LightSpacePoint& c = scene.vertex(tri[2]);
     MeshKind kind = world.meshes[world.triangle_mesh[t]].kind;
-    if (kind == MeshKind::closed) {
+    if (kind != MeshKind::open) {
       emit(geometry.closed_vertices, a);
       emit(geometry.closed_vertices, b);
       emit(geometry.closed_vertices, c);
       geometry.closed.front.push_back(faces_light(a, b, c) ? 1 : 0);
+      geometry.closed.heightfield.push_back(kind == MeshKind::heightfield ? 1 : 0);
     } else {
       emit(geometry.open_vertices, a);
       emit(geometry.open_vertices, b);
       emit(geometry.open_vertices, c);
-      geometry.open_is_heightfield.push_back(kind == MeshKind::heightfield ? 1 : 0);
+      ++geometry.open_count;
     }
   }
   return geometry;
@@ -115,8 +119,7 @@ unsigned attach_triangles(RTCDevice device, RTCScene scene, const std::vector<fl
 }
 
 // Combines one ray's hits into its interval (rules in the header).
-DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t, bool open_is_heightfield,
-                               float exit_margin) {
+DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t, float exit_margin) {
   // Closed hits beyond the nearest open hit were recorded before that hit shortened the ray.
   std::erase_if(closed_hits, [&](const ClosedHit& h) { return h.t > open_t; });
   // Spatial splits may report one triangle twice.
@@ -134,21 +137,28 @@ DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t
   if (closed_hits.empty() && open_t == std::numeric_limits<float>::infinity()) return interval;
   if (closed_hits.empty() || open_t <= closed_hits.front().t) {
     interval.lower = open_t;
-    interval.upper = open_is_heightfield ? std::max(open_t, 1.0f) : open_t;
+    interval.upper = open_t;
     return interval;
   }
   interval.lower = closed_hits.front().t;
   interval.upper = interval.lower;
   if (!closed_hits.front().front) return interval;
-  int depth = 0;
+  // The solid is the union of closed meshes and heightfields; a heightfield's solid is closed by
+  // the far plane. The ray is inside while the counter is positive.
+  int depth = 0, heightfield_depth = 0;
   for (const ClosedHit& hit : closed_hits) {
     depth += hit.front ? 1 : -1;
-    if (depth < 0) break;  // inconsistent: stay conservative
+    if (hit.heightfield) heightfield_depth += hit.front ? 1 : -1;
+    if (depth < 0) return interval;  // inconsistent: stay conservative
     if (depth == 0) {
       interval.upper = std::max(interval.lower, hit.t - exit_margin);
-      break;
+      return interval;
     }
   }
+  // Still inside: only a heightfield (solid down to the far plane) with no open surface below
+  // gives an exit, the far plane.
+  if (heightfield_depth > 0 && open_t == std::numeric_limits<float>::infinity())
+    interval.upper = std::max(interval.lower, 1.0f);
   return interval;
 }
 
@@ -188,13 +198,13 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
   if (!geometry.closed.front.empty())
     closed_id = attach_triangles(device_.get(), rtc_scene.get(), geometry.closed_vertices, &geometry.closed);
   unsigned open_id = RTC_INVALID_GEOMETRY_ID;
-  if (!geometry.open_is_heightfield.empty())
+  if (geometry.open_count)
     open_id = attach_triangles(device_.get(), rtc_scene.get(), geometry.open_vertices, nullptr);
   rtcCommitScene(rtc_scene.get());
   if (RTCError error = rtcGetDeviceError(device_.get()); error != RTC_ERROR_NONE)
     return make_error(ErrorCode::io_error, "embree failed to build the tile BVH (error " +
                                                std::to_string(int(error)) + ")");
-  local.triangles = geometry.closed.front.size() + geometry.open_is_heightfield.size();
+  local.triangles = geometry.closed.front.size() + geometry.open_count;
   local.bvh_seconds = seconds_since(bvh_start);
 
   auto ray_start = Clock::now();
@@ -231,8 +241,7 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
       for (unsigned lane = 0; lane < kPacket && u_start + lane < size; ++lane) {
         bool open_hit = packet.hit.geomID[lane] == open_id && open_id != RTC_INVALID_GEOMETRY_ID;
         float open_t = open_hit ? packet.ray.tfar[lane] : inf;
-        bool heightfield = open_hit && geometry.open_is_heightfield[packet.hit.primID[lane]] != 0;
-        DepthInterval interval = resolve_interval(lanes[lane], open_t, heightfield, options_.exit_margin);
+        DepthInterval interval = resolve_interval(lanes[lane], open_t, options_.exit_margin);
         intervals.at(u_start + lane, v) = interval;
         if (interval.lower < 1.0f) ++local.hits;
         if (interval.upper > interval.lower) ++local.exits;

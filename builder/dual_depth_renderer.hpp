@@ -7,7 +7,9 @@
 //   floor) stay shadowed for any query bias up to that margin;
 // - a first hit on an open mesh, a back-facing first hit, or a counter that never returns to 0
 //   before an open surface: upper = lower (conservative, never leaks light);
-// - a first hit on a heightfield mesh: upper = 1 (solid down to the far plane);
+// - heightfield meshes bound a solid closed by the far plane: they join the counter walk, so a ray
+//   entering a hill exits where it leaves the hill (receivers in the valley behind stay shadowed),
+//   and a ray that stays inside terrain exits at the far plane (upper = 1);
 // - no hit: [1, +inf), fully lit.
 // The tile's BVH holds only the tile's triangles, in tile-local light space (x, y in texels from the
 // tile corner, z = normalised depth), so float precision is relative to the tile, not the world.

@@ -3,24 +3,29 @@
 //
 // Formats: everything assimp 5.2 imports, chosen by file extension: OBJ, PLY (ascii and binary),
 // glTF 2.0 (.gltf, .glb), FBX, Collada (.dae), IFC, STL, OFF, 3DS, Terragen (.ter), ...
-// Only triangles are kept (polygons are triangulated; points and lines are ignored). Node transforms
-// are composed and applied in double precision here rather than by assimp (whose matrices are
-// float): large translations (geo-referenced nodes at 10^6 units) keep sub-millimetre precision, and
-// every mesh instance keeps its node name for heightfield matching. Mirroring transforms (negative
+// Only triangles are kept (polygons are triangulated; points and lines are ignored).
+// Node transforms are composed and applied in double here rather than by assimp's
+// aiProcess_PreTransformVertices, for two reasons: every mesh instance keeps its node name (for
+// heightfield matching and the log; PreTransformVertices merges meshes by material and drops the
+// hierarchy), and composition adds no rounding (assimp stores each matrix and vertex in float, so
+// values are float-rounded once when parsed, but a vertex at 0.3 under a node at 10^7 stays
+// 10000000.3 instead of snapping to float's 1-unit grid there). Mirroring transforms (negative
 // determinant) swap the winding so front faces stay front faces.
 // Coordinates are not converted: the file's own axes and units are kept, except where assimp's
 // importer itself converts (its IFC importer turns IFC's z-up into y-up through the root node).
-// Terragen .ter: assimp builds a z-up grid in the file's units: x, y from 0 to (size - 1) * SCAL
-// (metres by Terragen's convention; 30 m for RealisticTerrain.ter, 256 x 256 samples, 130,050
-// triangles after the loader drops none) and z = height in metres, as one mesh. Mark it a
-// heightfield. See tests/test_scene_loader.cpp for the values checked.
-//
-// Mesh names: "<node>/<mesh>" (or just one of them when the other is empty or equal), "mesh<i>"
-// when both are empty; repeats get "#2", "#3"... A heightfield entry matches a mesh instance by its
+// Terragen .ter is read by our own reader (assimp 5.2's is broken: assimp issues #3093, #4931):
+// z up, x east, y north, metres (x, y = sample index * SCAL, z = SCAL.z * (base + sample * scale /
+// 65536)), origin at the south-west sample, two triangles per cell counter-clockwise seen from above,
+// one mesh named after the file stem. RealisticTerrain.ter: 257 x 257 samples at 30 m, 131,072
+// triangles, bounds [0, 0, -79.0] .. [7680, 7680, 874.5], identical to scenes/terragen's .ply.
+// Declare it a heightfield (LoadOptions::heightfield_meshes = {"RealisticTerrain"} or {"*"}).
+// Mesh names: "<node>/<mesh>" (or just one of them when the other is empty or equal), the file stem
+// when both are empty (PLY, STL); repeats get "#2", "#3"... A heightfield entry matches a mesh instance by its
 // full name, its node name or its mesh name; "*" matches all.
 //
 // Errors: not_found when the file does not exist; unsupported when no importer handles its
-// extension; invalid_input when assimp fails (the message carries the file name and assimp's message,
+// extension (the format is chosen by extension only); io_error when it cannot be read;
+// invalid_input when assimp (or the .ter reader) fails (the message carries the file name and assimp's message,
 // which often names the line), when nothing but points/lines/degenerate triangles remain ("no
 // triangles"), when a heightfield name matches no mesh (the message lists the meshes), or when the
 // scene exceeds 2^32 - 1 vertices or triangles.

@@ -1,22 +1,77 @@
 #include "builder/tile_encoder.hpp"
 
+#include <chrono>
+#include <optional>
+
+#include "builder/mh_encoder.hpp"
+#include "builder/mh_hierarchy.hpp"
+#include "builder/mmh_merger.hpp"
 #include "client/raw_tile.hpp"
 
 namespace shadowtiles {
+namespace {
 
-bool builder_supports(store::Method method) { return method == store::Method::raw; }
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-Result<std::vector<uint8_t>> encode_tile_payload(store::Method method, const TileIntervals& intervals) {
-  switch (method) {
-    case store::Method::raw: {
-      std::vector<float> lower(intervals.texels.size());
-      for (size_t i = 0; i < lower.size(); ++i) lower[i] = intervals.texels[i].lower;
-      return encode_raw_tile(intervals.size, lower);
+}  // namespace
+
+bool builder_supports(store::Method method) {
+  return method == store::Method::raw || method == store::Method::mh || method == store::Method::mmh;
+}
+
+Result<TileEncoding> encode_tile(const std::vector<store::Method>& methods, const TileIntervals& intervals,
+                                 const TileEncodeOptions& options) {
+  TileEncoding encoding;
+  std::optional<MhHierarchy> mh;
+  // The MH is built once; its time is charged to the first method that needs it.
+  auto ensure_mh = [&]() -> Status {
+    if (mh) return {};
+    MhBuildOptions build_options;
+    build_options.construction = options.construction;
+    auto built = build_mh(intervals, build_options);
+    if (!built) return built.error();
+    mh = std::move(*built);
+    encoding.root = summarize(*mh).root;
+    encoding.has_root = true;
+    return {};
+  };
+  for (store::Method method : methods) {
+    auto start = Clock::now();
+    EncodedPayload out{method, {}, 0, 0};
+    switch (method) {
+      case store::Method::raw: {
+        std::vector<float> lower(intervals.texels.size());
+        for (size_t i = 0; i < lower.size(); ++i) lower[i] = intervals.texels[i].lower;
+        out.payload = encode_raw_tile(intervals.size, lower);
+        break;
+      }
+      case store::Method::mh: {
+        if (Status s = ensure_mh(); !s) return s.error();
+        auto bytes = encode_mh(*mh);
+        if (!bytes) return bytes.error();
+        out.payload = std::move(*bytes);
+        out.reference_bytes = sbe16a_reference_bytes(*mh);
+        break;
+      }
+      case store::Method::mmh: {
+        if (Status s = ensure_mh(); !s) return s.error();
+        auto merged = merge_mmh(*mh);
+        if (!merged) return merged.error();
+        auto bytes = encode_mh(*merged);
+        if (!bytes) return bytes.error();
+        out.payload = std::move(*bytes);
+        out.reference_bytes = sbe16a_reference_bytes(*merged);
+        break;
+      }
+      default:
+        return make_error(ErrorCode::unsupported,
+                          std::string("method '") + store::method_name(method) + "' is not implemented by this builder");
     }
-    default:
-      return make_error(ErrorCode::unsupported,
-                        std::string("method '") + store::method_name(method) + "' is not implemented by this builder");
+    out.seconds = seconds_since(start);
+    encoding.payloads.push_back(std::move(out));
   }
+  return encoding;
 }
 
 }  // namespace shadowtiles

@@ -1,5 +1,7 @@
-// Tile encoders: one tile's dual-depth intervals -> the payload of each stored method. The payload
-// is what the blob container (store/blob.hpp) compresses and checksums.
+// Tile encoders: one tile's dual-depth intervals -> the payload of every requested method (the blob
+// container, store/blob.hpp, compresses and checksums it). MH is built once and shared by the
+// methods derived from it (MMH merges it), and the tile's root interval is reported for the top
+// levels (DESIGN.md §5 "tiled build").
 // Thread safety: stateless; call concurrently.
 #pragma once
 
@@ -7,14 +9,33 @@
 #include <vector>
 
 #include "builder/depth_interval.hpp"
+#include "builder/mh_builder.hpp"
 #include "store/method.hpp"
 #include "store/result.hpp"
 
 namespace shadowtiles {
 
-// Errors: unsupported for a method this builder cannot encode yet.
-Result<std::vector<uint8_t>> encode_tile_payload(store::Method method, const TileIntervals& intervals);
-// Methods encode_tile_payload accepts.
+struct TileEncodeOptions {
+  MhConstruction construction = MhConstruction::bottom_up;
+};
+
+struct EncodedPayload {
+  store::Method method;
+  std::vector<uint8_t> payload;
+  double seconds = 0;         // this method's own encode time (the shared MH build counts for mh)
+  uint64_t reference_bytes = 0;  // SBE16a layout size, for the papers' tables (MH family only)
+};
+
+struct TileEncoding {
+  std::vector<EncodedPayload> payloads;  // in the order of the requested methods
+  DepthInterval root;                    // interval every texel of the tile shares (MH root)
+  bool has_root = false;
+};
+
+// Errors: unsupported for a method this builder cannot encode; invalid_input for bad intervals.
+Result<TileEncoding> encode_tile(const std::vector<store::Method>& methods, const TileIntervals& intervals,
+                                 const TileEncodeOptions& options = {});
+// Methods encode_tile accepts.
 bool builder_supports(store::Method method);
 
 }  // namespace shadowtiles

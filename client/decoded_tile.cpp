@@ -1,5 +1,6 @@
 #include "client/decoded_tile.hpp"
 
+#include "client/mh_decoder.hpp"
 #include "client/raw_tile.hpp"
 
 namespace shadowtiles {
@@ -16,7 +17,40 @@ class RawDecodedTile final : public DecodedTile {
   RawTileView view_;
 };
 
+// MH and MMH share one format and decoder; the view points into the owned payload.
+class MhDecodedTile final : public DecodedTile {
+ public:
+  static Result<std::shared_ptr<const DecodedTile>> make(std::span<const uint8_t> payload) {
+    auto tile = std::shared_ptr<MhDecodedTile>(new MhDecodedTile(payload));
+    auto view = MhTileView::parse(tile->payload_);
+    if (!view) return view.error();
+    tile->view_ = std::move(*view);
+    return std::shared_ptr<const DecodedTile>(std::move(tile));
+  }
+  uint32_t size() const override { return view_.size(); }
+  float value(uint32_t u, uint32_t v, unsigned max_level) const override {
+    return view_.lookup(u, v, max_level == 255 ? kMhAllLevels : max_level);
+  }
+  size_t memory_bytes() const override { return payload_.size() + sizeof(*this) + view_.stats().skip_list_bytes; }
+  uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const override {
+    return view_.pcf_lit_count(u0, v0, kw, kh, threshold, 0.0f);
+  }
+  const MhTileView& view() const { return view_; }
+
+ private:
+  explicit MhDecodedTile(std::span<const uint8_t> payload) : payload_(payload.begin(), payload.end()) {}
+  std::vector<uint8_t> payload_;
+  MhTileView view_;
+};
+
 }  // namespace
+
+uint32_t DecodedTile::lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const {
+  uint32_t lit = 0;
+  for (uint32_t v = v0; v < v0 + kh; ++v)
+    for (uint32_t u = u0; u < u0 + kw; ++u) lit += threshold <= value(u, v);
+  return lit;
+}
 
 Result<std::shared_ptr<const DecodedTile>> decode_tile(store::Method method, std::span<const uint8_t> payload) {
   switch (method) {
@@ -25,6 +59,9 @@ Result<std::shared_ptr<const DecodedTile>> decode_tile(store::Method method, std
       if (!view) return view.error();
       return std::shared_ptr<const DecodedTile>(std::make_shared<RawDecodedTile>(std::move(*view)));
     }
+    case store::Method::mh:
+    case store::Method::mmh:
+      return MhDecodedTile::make(payload);
     default:
       return make_error(ErrorCode::unsupported,
                         std::string("no decoder for method '") + store::method_name(method) + "'");

@@ -20,6 +20,10 @@ class DecodedTile {
   // `max_level` limits the descent of hierarchical methods (0 = tile root); flat methods ignore it.
   virtual float value(uint32_t u, uint32_t v, unsigned max_level = 255) const = 0;
   virtual size_t memory_bytes() const = 0;
+  // How many texels of the kw x kh box at (u0, v0) (inside the tile) are lit for a receiver whose
+  // biased depth is `threshold` (lit: threshold <= value), at full resolution. Hierarchical methods
+  // override it with one descent to the box's common ancestor.
+  virtual uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const;
 };
 
 // Decodes a blob's payload for `method`. Errors: corrupt_data (malformed payload), unsupported.

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "store/blob.hpp"
+#include "store/lmdb_store.hpp"
 
 namespace shadowtiles {
 
@@ -28,8 +29,25 @@ Result<std::unique_ptr<ShadowMap>> ShadowMap::open(const std::filesystem::path& 
   auto layout = meta->layout();
   if (!frame) return frame.error();
   if (!layout) return layout.error();
-  return std::unique_ptr<ShadowMap>(
-      new ShadowMap(std::move(*opened), std::move(*meta), *frame, *layout, options));
+  // Top trees of hierarchical methods (small: one value per tile at most), checked like any blob.
+  std::map<store::Method, std::shared_ptr<const DecodedTile>> top_trees;
+  for (store::Method method : meta->methods) {
+    auto blob = (*opened)->get(store::Database::top, store::as_bytes(top_tree_key(method)));
+    if (!blob) return blob.error();
+    if (!blob->has_value()) continue;
+    store::BlobHeader header;
+    auto payload = store::decode_blob(**blob, &header);
+    if (!payload) return make_error(payload.error().code, "top tree: " + payload.error().message);
+    if (header.method != method) return make_error(ErrorCode::corrupt_data, "top tree holds another method");
+    auto tree = decode_tile(method, *payload);
+    if (!tree) return make_error(tree.error().code, "top tree: " + tree.error().message);
+    if ((*tree)->size() != layout->tiles_per_side())
+      return make_error(ErrorCode::corrupt_data, "top tree size differs from the tile grid");
+    top_trees[method] = std::move(*tree);
+  }
+  auto map = std::unique_ptr<ShadowMap>(new ShadowMap(std::move(*opened), std::move(*meta), *frame, *layout, options));
+  map->top_trees_ = std::move(top_trees);
+  return map;
 }
 
 Result<std::shared_ptr<const DecodedTile>> ShadowMap::tile(store::Method method, TileCoord coord) const {
@@ -111,6 +129,12 @@ Result<unsigned> ShadowMap::tile_max_level(std::optional<unsigned> level) const 
   return *level > layout_.tile_level() ? *level - layout_.tile_level() : 0u;
 }
 
+std::optional<float> ShadowMap::top_value(store::Method method, uint32_t u, uint32_t v, unsigned level) const {
+  auto it = top_trees_.find(method);
+  if (it == top_trees_.end() || level >= layout_.tile_level()) return std::nullopt;
+  return it->second->value(u / layout_.tile_size(), v / layout_.tile_size(), level);
+}
+
 Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, unsigned kernel,
                                     std::optional<double> bias, std::optional<unsigned> level,
                                     ShadowAnswer* answer_out) const {
@@ -131,28 +155,45 @@ Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, uns
     return 1.0;
   }
   const int64_t cu = int64_t(answer.light.u), cv = int64_t(answer.light.v), half = kernel / 2;
-  const double threshold = answer.light.depth - frame_.depth_from_world(bias_world);
-  const uint32_t size = layout_.tile_size();
+  const float threshold = float(answer.light.depth - frame_.depth_from_world(bias_world));
+  const int64_t size = layout_.tile_size();
   const int64_t side = int64_t(layout_.resolution());
-  uint64_t lit = 0;
-  // Samples grouped by tile: each tile is fetched once per kernel.
-  for (int64_t v = cv - half; v <= cv + half; ++v) {
-    for (int64_t u = cu - half; u <= cu + half;) {
-      if (u < 0 || v < 0 || u >= side || v >= side) { ++lit; ++u; continue; }
-      TileCoord coord{uint32_t(u / size), uint32_t(v / size)};
-      int64_t run_end = std::min<int64_t>(cu + half, int64_t(coord.x + 1) * size - 1);
-      auto decoded = tile(method, coord);
+  // The kernel box, clipped to the map (samples outside are lit), split into its parts per tile.
+  const int64_t u_lo = cu - half, u_hi = cu + half, v_lo = cv - half, v_hi = cv + half;
+  const int64_t cu_lo = std::max<int64_t>(u_lo, 0), cu_hi = std::min<int64_t>(u_hi, side - 1);
+  const int64_t cv_lo = std::max<int64_t>(v_lo, 0), cv_hi = std::min<int64_t>(v_hi, side - 1);
+  uint64_t lit = uint64_t(kernel) * kernel - uint64_t(cu_hi - cu_lo + 1) * uint64_t(cv_hi - cv_lo + 1);
+  for (int64_t ty = cv_lo / size; ty <= cv_hi / size; ++ty) {
+    for (int64_t tx = cu_lo / size; tx <= cu_hi / size; ++tx) {
+      auto decoded = tile(method, {uint32_t(tx), uint32_t(ty)});
       if (!decoded) return decoded.error();
-      for (; u <= run_end; ++u) {
-        float value = *decoded ? (*decoded)->value(uint32_t(u) % size, uint32_t(v) % size, *max_level)
-                               : std::numeric_limits<float>::infinity();
-        if (u == cu && v == cv) {
-          answer.value = value;
-          answer.empty_tile = !*decoded;
-        }
-        lit += threshold <= double(value);
+      int64_t bu0 = std::max(cu_lo, tx * size), bu1 = std::min(cu_hi, tx * size + size - 1);
+      int64_t bv0 = std::max(cv_lo, ty * size), bv1 = std::min(cv_hi, ty * size + size - 1);
+      uint32_t kw = uint32_t(bu1 - bu0 + 1), kh = uint32_t(bv1 - bv0 + 1);
+      if (!*decoded) {
+        lit += uint64_t(kw) * kh;  // empty tile: lit
+        continue;
+      }
+      const DecodedTile& t = **decoded;
+      uint32_t lu = uint32_t(bu0 - tx * size), lv = uint32_t(bv0 - ty * size);
+      if (*max_level == 255) {
+        lit += t.lit_count(lu, lv, kw, kh, threshold);
+      } else {
+        for (uint32_t v = lv; v < lv + kh; ++v)
+          for (uint32_t u = lu; u < lu + kw; ++u) {
+            auto coarse = top_value(method, uint32_t(tx * size + u), uint32_t(ty * size + v), *level);
+            lit += threshold <= (coarse ? *coarse : t.value(u, v, *max_level));
+          }
       }
     }
+  }
+  {
+    // The centre texel's value, for the answer's record.
+    auto centre = tile(method, {uint32_t(cu / size), uint32_t(cv / size)});
+    if (!centre) return centre.error();
+    answer.empty_tile = !*centre;
+    answer.value = *centre ? (*centre)->value(uint32_t(cu % size), uint32_t(cv % size), *max_level)
+                           : std::numeric_limits<float>::infinity();
   }
   double fraction = double(lit) / double(kernel * kernel);
   answer.lit = fraction > 0.5;
@@ -176,6 +217,16 @@ Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, s
   }
   uint32_t u = uint32_t(answer.light.u), v = uint32_t(answer.light.v);
   const uint32_t size = layout_.tile_size();
+  if (level) {
+    if (!meta_.has_method(method))
+      return make_error(ErrorCode::unsupported,
+                        std::string("method '") + store::method_name(method) + "' is not in this store");
+    if (auto coarse = top_value(method, u, v, *level)) {
+      answer.value = *coarse;
+      answer.lit = float(answer.light.depth - frame_.depth_from_world(bias_world)) <= answer.value;
+      return answer;
+    }
+  }
   auto decoded = tile(method, {u / size, v / size});
   if (!decoded) return decoded.error();
   if (!*decoded) {
@@ -185,7 +236,7 @@ Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, s
   }
   answer.value = (*decoded)->value(u % size, v % size, *max_level);
   // Same comparison as query_pcf, so a 1x1 kernel equals a point query exactly.
-  answer.lit = answer.light.depth - frame_.depth_from_world(bias_world) <= double(answer.value);
+  answer.lit = float(answer.light.depth - frame_.depth_from_world(bias_world)) <= answer.value;
   return answer;
 }
 

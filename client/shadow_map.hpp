@@ -52,6 +52,9 @@ class ShadowMap {
   const StoreMeta& meta() const { return meta_; }
   const LightFrame& frame() const { return frame_; }
   const TileLayout& layout() const { return layout_; }
+  // The open read-only store, for serving stored blobs unchanged (server/): one process must not
+  // open the same LMDB directory twice.
+  const store::Store& store() const { return *store_; }
   // The first method of the build, used when a query names none.
   store::Method default_method() const { return meta_.methods.front(); }
 
@@ -82,7 +85,12 @@ class ShadowMap {
   // Query level -> max level inside a tile tree (255 = finest).
   Result<unsigned> tile_max_level(std::optional<unsigned> level) const;
 
+  // Value at global texel (u, v) for a level of detail at or above the tile level, from the
+  // method's top tree; nullopt when the method has none (flat methods: the tile's value is used).
+  std::optional<float> top_value(store::Method method, uint32_t u, uint32_t v, unsigned level) const;
+
   std::unique_ptr<store::Store> store_;
+  std::map<store::Method, std::shared_ptr<const DecodedTile>> top_trees_;  // loaded at open
   StoreMeta meta_;
   LightFrame frame_;
   TileLayout layout_;

@@ -21,6 +21,8 @@ namespace shadowtiles {
 // FORMAT: bump when the meta record or any tile payload changes incompatibly.
 constexpr int kStoreFormatVersion = 1;
 constexpr const char* kMetaBuildKey = "build";
+// Key of a hierarchical method's top-level tree (with embedded skip list) in the `top` database.
+inline std::string top_tree_key(store::Method method) { return std::string("top/") + store::method_name(method); }
 
 struct StoreMeta {
   int format_version = kStoreFormatVersion;

@@ -145,6 +145,33 @@ TEST(DualDepth, HeightfieldIsSolidToTheFarPlane) {
   EXPECT_EQ(i.upper, 1.0f);
 }
 
+TEST(DualDepth, HeightfieldHillShadowsTheValleyBehindIt) {
+  // A ridge in terrain under a low sun: the ray enters the sunlit slope and leaves the far slope;
+  // the valley floor behind is below that exit and must stay shadowed (the solid is not "everything
+  // below the first hit" unless the sun is overhead).
+  Scene scene;
+  std::vector<Vec3> v{{0, 0, 0}, {5, 0, 5}, {10, 0, 0}, {30, 0, 0}, {0, 10, 0}, {5, 10, 5}, {10, 10, 0}, {30, 10, 0}};
+  Triangles t{{0, 1, 5}, {0, 5, 4}, {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}};
+  scene.add_mesh("terrain", v, t, /*heightfield=*/true);
+  Vec3 light{1, 0, -0.3};  // sun low in the -x direction
+  auto frame = LightFrame::fit(light, scene.bounds, 256);
+  ASSERT_TRUE(frame.ok());
+  auto layout = TileLayout::make(256, 256);
+  LightSpaceScene light_scene(scene, *frame, *layout);
+  auto device = EmbreeDevice::create();
+  DualDepthRenderer renderer(*device, light_scene);
+  auto tile = renderer.render({0, 0});
+  ASSERT_TRUE(tile.ok());
+  LightSpacePoint valley = frame->to_light({15, 5, 0});
+  const DepthInterval& i = tile->at(uint32_t(valley.u), uint32_t(valley.v));
+  EXPECT_LT(i.lower, valley.depth) << "the ridge is in front of the valley";
+  EXPECT_LT(i.upper, valley.depth) << "the exit is on the ridge's far slope, not at the far plane";
+  LightSpacePoint open_ground = frame->to_light({28, 5, 0});
+  const DepthInterval& g = tile->at(uint32_t(open_ground.u), uint32_t(open_ground.v));
+  EXPECT_NEAR(g.lower, open_ground.depth, 1e-3) << "sunlit ground beyond the shadow";
+  EXPECT_EQ(g.upper, 1.0f) << "terrain solid to the far plane below a lit surface";
+}
+
 TEST(DualDepth, MissesAreFullyLit) {
   Scene scene;
   add_box(scene, "small", {0, 0, 0}, {1, 1, 1});

@@ -1,0 +1,128 @@
+// MH / MMH on synthetic tiles: build phases (bottom-up, top-down, merge, encode, parse), sizes as
+// counters, and lookup rates (point coherent/random, PCF 3x3 and 5x5; 1 and 2 threads).
+//   build-release/bench/bench_mh --benchmark_filter=Lookup
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <random>
+
+#include "builder/mh_builder.hpp"
+#include "builder/mh_encoder.hpp"
+#include "builder/mh_synthetic.hpp"
+#include "builder/mmh_merger.hpp"
+#include "client/mh_decoder.hpp"
+
+namespace st = shadowtiles;
+
+namespace {
+
+const st::MhSyntheticKind kKinds[] = {st::MhSyntheticKind::steps, st::MhSyntheticKind::closed_plane,
+                                      st::MhSyntheticKind::noisy_plane, st::MhSyntheticKind::random_intervals};
+
+const st::TileIntervals& tile(int kind, uint32_t size) {
+  static std::mutex mutex;
+  static std::map<std::pair<int, uint32_t>, std::unique_ptr<st::TileIntervals>> cache;
+  std::lock_guard lock(mutex);
+  auto& slot = cache[{kind, size}];
+  if (!slot) slot = std::make_unique<st::TileIntervals>(st::make_synthetic_tile(kKinds[kind], size, 42));
+  return *slot;
+}
+
+struct Encoded {
+  std::vector<uint8_t> bytes;
+  st::MhTileView view;
+};
+const Encoded& encoded(int kind, uint32_t size, bool merged) {
+  static std::mutex mutex;
+  static std::map<std::tuple<int, uint32_t, bool>, std::unique_ptr<Encoded>> cache;
+  std::lock_guard lock(mutex);
+  auto& slot = cache[{kind, size, merged}];
+  if (!slot) {
+    slot = std::make_unique<Encoded>();
+    auto tree = *st::build_mh(tile(kind, size));
+    slot->bytes = *st::encode_mh(merged ? *st::merge_mmh(tree) : tree);
+    slot->view = *st::MhTileView::parse(slot->bytes);
+  }
+  return *slot;
+}
+
+void BM_Build(benchmark::State& state) {
+  const int kind = int(state.range(0));
+  const uint32_t size = uint32_t(state.range(1));
+  const auto construction = state.range(2) ? st::MhConstruction::top_down : st::MhConstruction::bottom_up;
+  const st::TileIntervals& t = tile(kind, size);
+  st::MhHierarchy tree;
+  for (auto _ : state) tree = *st::build_mh(t, {construction});
+  const auto mh = *st::encode_mh(tree);
+  st::MmhMergeStats stats;
+  const auto mmh = *st::encode_mh(*st::merge_mmh(tree, {}, &stats));
+  state.SetLabel(std::string(st::synthetic_kind_name(kKinds[kind])) + (state.range(2) ? " top-down" : " bottom-up"));
+  state.counters["raw_B"] = double(size) * size * 4;
+  state.counters["mh_B"] = double(mh.size());
+  state.counters["mmh_B"] = double(mmh.size());
+  state.counters["sbe16a_mh_B"] = double(st::sbe16a_reference_bytes(tree));
+  state.counters["nodes"] = double(st::count_nodes(tree).tree_nodes);
+  state.counters["texels/s"] = benchmark::Counter(double(size) * size, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+void BM_Merge(benchmark::State& state) {
+  const auto tree = *st::build_mh(tile(int(state.range(0)), uint32_t(state.range(1))));
+  for (auto _ : state) benchmark::DoNotOptimize(st::merge_mmh(tree));
+  state.SetLabel(st::synthetic_kind_name(kKinds[state.range(0)]));
+}
+
+void BM_Encode(benchmark::State& state) {
+  const auto tree = *st::build_mh(tile(int(state.range(0)), uint32_t(state.range(1))));
+  for (auto _ : state) benchmark::DoNotOptimize(st::encode_mh(tree));
+  state.SetLabel(st::synthetic_kind_name(kKinds[state.range(0)]));
+}
+
+void BM_Parse(benchmark::State& state) {
+  const Encoded& e = encoded(int(state.range(0)), uint32_t(state.range(1)), state.range(2));
+  for (auto _ : state) benchmark::DoNotOptimize(st::MhTileView::parse(e.bytes));
+  state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(e.bytes.size()));
+  state.SetLabel(std::string(st::synthetic_kind_name(kKinds[state.range(0)])) + (state.range(2) ? " mmh" : " mh"));
+}
+
+// range: kind, size, merged, mode (0 point row order, 1 point random, 3 / 5 PCF k random).
+void BM_Lookup(benchmark::State& state) {
+  const uint32_t size = uint32_t(state.range(1));
+  const Encoded& e = encoded(int(state.range(0)), size, state.range(2));
+  const int mode = int(state.range(3));
+  std::mt19937 rng(unsigned(state.thread_index()) + 1);
+  std::vector<uint32_t> coords(1 << 16);
+  for (auto& c : coords) c = rng();
+  const uint32_t k = mode >= 3 ? uint32_t(mode) : 1;
+  uint64_t n = 0, i = 0, row = 0;
+  float sum = 0;
+  for (auto _ : state) {
+    if (mode == 0) {  // coherent: one row
+      const uint32_t v = uint32_t(row++ % size);
+      for (uint32_t u = 0; u < size; ++u) sum += e.view.lookup(u, v);
+      n += size;
+    } else {
+      for (int j = 0; j < 1024; ++j, i += 2) {
+        const uint32_t u = coords[i & 0xffff] % (size - k + 1), v = coords[(i + 1) & 0xffff] % (size - k + 1);
+        sum += mode == 1 ? e.view.lookup(u, v) : e.view.pcf_lit_fraction(u, v, k, 0.5f, 1e-4f);
+      }
+      n += 1024;
+    }
+  }
+  benchmark::DoNotOptimize(sum);
+  state.counters["lookups/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
+  static const char* modes[] = {"point row-order", "point random", "", "pcf3 random", "", "pcf5 random"};
+  state.SetLabel(std::string(st::synthetic_kind_name(kKinds[state.range(0)])) + (state.range(2) ? " mmh " : " mh ") +
+                 modes[mode]);
+}
+
+}  // namespace
+
+BENCHMARK(BM_Build)->ArgsProduct({{0, 1, 2, 3}, {1024, 4096}, {0}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Build)->ArgsProduct({{0, 1, 2, 3}, {1024}, {1}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Merge)->ArgsProduct({{0, 1, 2, 3}, {1024, 4096}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Encode)->ArgsProduct({{0, 1, 3}, {4096}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Parse)->ArgsProduct({{0, 3}, {4096}, {0, 1}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Lookup)->ArgsProduct({{0, 3}, {4096}, {0, 1}, {0, 1, 3, 5}})->Threads(1)->Threads(2);
+BENCHMARK_MAIN();

@@ -1,0 +1,99 @@
+#include "builder/mh_builder.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "builder/mh_dense_levels.hpp"
+#include "builder/mh_top_down.hpp"
+
+namespace shadowtiles {
+
+Status check_tile_intervals(const TileIntervals& tile) {
+  auto fail = [](const std::string& m) { return Status(make_error(ErrorCode::invalid_input, "MH build: " + m)); };
+  if (tile.size == 0 || tile.size > 16384 || !std::has_single_bit(tile.size))
+    return fail("tile size " + std::to_string(tile.size) + " is not a power of two in [1, 16384]");
+  if (tile.texels.size() != size_t(tile.size) * tile.size) return fail("texel count does not match the size");
+  for (size_t i = 0; i < tile.texels.size(); ++i) {
+    const DepthInterval& t = tile.texels[i];
+    if (!std::isfinite(t.lower) || !(t.lower <= t.upper))
+      return fail("texel " + std::to_string(i) + " has an invalid interval [" + std::to_string(t.lower) + ", " +
+                  std::to_string(t.upper) + "]");
+  }
+  return Status::success();
+}
+
+namespace {
+
+MhHierarchy build_bottom_up(const TileIntervals& tile) {
+  const unsigned L = unsigned(std::countr_zero(tile.size));
+  MhDenseLevels dense;
+  dense.size = tile.size;
+  dense.levels = L;
+  dense.masks.resize(L);
+  dense.valued.resize(L + 1);
+  if (L == 0) {
+    dense.valued[0] = {tile.texels[0]};
+    return to_hierarchy(std::move(dense));
+  }
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  std::vector<DepthInterval> child, parent;  // intervals of levels l+1 and l, dense, Morton order
+  for (unsigned l = L; l-- > 0;) {
+    const size_t n = size_t(1) << (2 * l);
+    const bool bottom = l + 1 == L;
+    parent.resize(n);
+    auto& masks = dense.masks[l];
+    masks.resize(n);
+    const auto* child_masks = bottom ? nullptr : dense.masks[l + 1].data();
+    auto& valued = dense.valued[l + 1];
+    for (size_t p = 0; p < n; ++p) {
+      DepthInterval c[4];
+      if (bottom) {  // texels straight from the row-major input: a 2x2 block
+        const DepthInterval* row = &tile.texels[size_t(2 * morton_y(p)) * tile.size + 2 * morton_x(p)];
+        c[0] = row[0], c[1] = row[1], c[2] = row[tile.size], c[3] = row[tile.size + 1];
+      } else {
+        for (unsigned i = 0; i < 4; ++i) c[i] = child[4 * p + i];
+      }
+      // The depth covered by most children is some child's lower bound; ties go to the first.
+      unsigned best = 0, best_count = 0;
+      for (unsigned i = 0; i < 4; ++i) {
+        unsigned count = 0;
+        for (unsigned j = 0; j < 4; ++j) count += c[j].lower <= c[i].lower && c[i].lower <= c[j].upper;
+        if (count > best_count) best = i, best_count = count;
+      }
+      const float candidate = c[best].lower;
+      DepthInterval interval{-kInf, kInf};
+      uint8_t mask = 0;
+      for (unsigned i = 0; i < 4; ++i) {
+        unsigned code;
+        if (c[i].lower <= candidate && candidate <= c[i].upper) {
+          interval.lower = std::max(interval.lower, c[i].lower);
+          interval.upper = std::min(interval.upper, c[i].upper);
+          code = 0;  // covered
+        } else {
+          code = 1;  // keeps a value
+          valued.push_back(c[i]);
+        }
+        if (child_masks && child_masks[4 * p + i] != 0) code |= 2;  // has kept descendants
+        mask |= uint8_t(code << (2 * i));
+      }
+      masks[p] = mask;
+      parent[p] = interval;
+    }
+    child.swap(parent);
+  }
+  dense.valued[0] = {child[0]};
+  return to_hierarchy(std::move(dense));
+}
+
+}  // namespace
+
+Result<MhHierarchy> build_mh(const TileIntervals& tile, const MhBuildOptions& options) {
+  if (Status s = check_tile_intervals(tile); !s) return s.error();
+  if (options.construction == MhConstruction::top_down) return build_mh_top_down(tile);
+  return build_bottom_up(tile);
+}
+
+}  // namespace shadowtiles

@@ -1,0 +1,44 @@
+// MMH merging (DESIGN.md §6; SBE16b): inside one tile, the children blocks of two nodes are shared
+// when their subtrees have identical topology (same child codes at every node) and every pair of
+// corresponding valued nodes has intersecting validity intervals. The kept block's intervals become
+// the intersections, so its values (midpoints, chosen by the encoder) are exact for every sharer.
+// Values are absolute: there is no relative mode (unsound under merging, see DESIGN.md §6).
+//
+// Algorithm: topology hash and height per block, bottom-up; blocks in order of decreasing height
+// (tallest first), each tested against the representatives of its (height, hash) bucket, most
+// recent first (neighbours in breadth-first order are near in space), at most
+// `max_tests_per_block` of them; a test first rejects on the subtrees' aggregate interval hulls,
+// then compares the structure and intervals fully (hash equality is never trusted). First fit wins;
+// a block that fits nowhere becomes a representative.
+//
+// Input: a tree as produced by build_mh (each block referenced once). Errors: invalid_input for a
+// malformed hierarchy or one that already shares blocks. Output: a hierarchy of the same levels
+// with shared blocks, unreachable blocks dropped. Thread safety: pure function.
+#pragma once
+
+#include <cstdint>
+
+#include "builder/mh_hierarchy.hpp"
+#include "store/result.hpp"
+
+namespace shadowtiles {
+
+struct MmhMergeOptions {
+  unsigned max_tests_per_block = 1024;  // authors' bound
+  // Bits of the topology hash used for bucketing (1..64). Test hook: few bits force collisions,
+  // which the full structural comparison must reject.
+  unsigned hash_bits = 64;
+};
+
+struct MmhMergeStats {
+  uint64_t blocks_before = 0, blocks_after = 0;
+  uint64_t merges = 0;            // blocks redirected to a representative
+  uint64_t hull_rejections = 0;   // candidates rejected on aggregate bounds
+  uint64_t full_tests = 0;        // full structural + interval comparisons
+  uint64_t topology_mismatches = 0;  // full tests that found different topology (hash collisions)
+};
+
+Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& options = {},
+                              MmhMergeStats* stats = nullptr);
+
+}  // namespace shadowtiles

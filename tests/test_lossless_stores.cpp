@@ -1,0 +1,164 @@
+// MH and MMH through the whole pipeline on real scenes: every texel of every tile decodes inside its
+// recomputed [lower, upper] interval (exhaustive), PCF through the hierarchy's common-ancestor path
+// equals per-texel counting (kernels across tile borders too), MMH is no larger than MH, coarse
+// levels come from the top tree.
+#include <gtest/gtest.h>
+
+#include "builder/build_job.hpp"
+#include "builder/receiver_sampler.hpp"
+#include "builder/scene_loader.hpp"
+#include "builder/store_verifier.hpp"
+#include "client/shadow_map.hpp"
+#include "store/lmdb_store.hpp"
+#include "tests/testing_support.hpp"
+
+namespace shadowtiles {
+namespace {
+
+struct SceneCase {
+  const char* file;
+  UpAxis up;
+  bool heightfield;
+  // Open geometry has point intervals (entry = exit) on most hit texels: the hierarchy must store
+  // a value per texel on sloped surfaces and can be larger than zstd'd raw floats.
+  bool expect_smaller_than_raw = true;
+};
+
+BuildConfig config_for(const SceneCase& scene, const std::filesystem::path& out, uint32_t resolution, uint32_t tile) {
+  BuildConfig config;
+  config.scene_path = testing::shared_scene(scene.file);
+  config.store_path = out;
+  config.resolution = resolution;
+  config.tile_size = tile;
+  config.load.up = scene.up;
+  if (scene.heightfield) config.load.heightfield_meshes = {"*"};
+  config.light_direction = *light_direction_from_sun(135, 40, scene.up);
+  config.methods = {store::Method::raw, store::Method::mh, store::Method::mmh};
+  return config;
+}
+
+void expect_lossless(const SceneCase& scene, uint32_t resolution, uint32_t tile) {
+  testing::TempDir dir;
+  auto summary = run_build(config_for(scene, dir.path() / "s", resolution, tile));
+  ASSERT_TRUE(summary.ok()) << summary.error().message;
+  auto map = ShadowMap::open(dir.path() / "s");
+  ASSERT_TRUE(map.ok()) << map.error().message;
+  LoadOptions load;
+  load.up = scene.up;
+  load.heightfield_meshes = (*map)->meta().heightfield_meshes;
+  auto loaded = load_scene(testing::shared_scene(scene.file), load);
+  ASSERT_TRUE(loaded.ok());
+  auto report = verify_store(**map, *loaded, {store::Method::raw, store::Method::mh, store::Method::mmh});
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  const auto& bytes = summary->stats["bytes_by_method"];
+  for (store::Method m : {store::Method::mh, store::Method::mmh}) {
+    const MethodVerification& v = report->methods.at(m);
+    EXPECT_EQ(v.texels, uint64_t(resolution) * resolution) << "every texel of the map is checked";
+    EXPECT_EQ(v.outside, 0u) << store::method_name(m) << ": " << v.first_violation;
+    EXPECT_EQ(v.wrong_answers, 0u) << store::method_name(m);
+  }
+  EXPECT_LE(bytes["mmh"].get<uint64_t>(), bytes["mh"].get<uint64_t>()) << "merging never grows a tile";
+  if (scene.expect_smaller_than_raw) EXPECT_LT(bytes["mh"].get<uint64_t>(), bytes["raw"].get<uint64_t>());
+  std::printf("[ figures  ] %s %u^2 tiles %u: bytes raw %llu mh %llu mmh %llu (mmh/mh %.3f)\n", scene.file, resolution,
+              tile, (unsigned long long)bytes["raw"].get<uint64_t>(), (unsigned long long)bytes["mh"].get<uint64_t>(),
+              (unsigned long long)bytes["mmh"].get<uint64_t>(),
+              double(bytes["mmh"].get<uint64_t>()) / double(bytes["mh"].get<uint64_t>()));
+}
+
+TEST(LosslessStores, NefertitiClosedMeshAt4096) { expect_lossless({"nefertiti/nefertiti.obj", UpAxis::z, false}, 4096, 1024); }
+TEST(LosslessStores, FzkHausOpenBuildingAt4096) { expect_lossless({"fzk_haus/fzk_haus.obj", UpAxis::y, false, false}, 4096, 1024); }
+TEST(LosslessStores, TerragenHeightfieldAt2048) { expect_lossless({"terragen/RealisticTerrain.ply", UpAxis::z, true}, 2048, 512); }
+
+class HierarchyQueries : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new testing::TempDir();
+    SceneCase scene{"bunny/stanford-bunny.obj", UpAxis::y, false};
+    ASSERT_TRUE(run_build(config_for(scene, dir_->path() / "s", 1024, 128)).ok());
+    auto loaded = load_scene(testing::shared_scene(scene.file), LoadOptions{{}, UpAxis::y});
+    ASSERT_TRUE(loaded.ok());
+    receivers_ = new std::vector<Receiver>(sample_receivers(*loaded, 2000, 5));
+  }
+  static void TearDownTestSuite() {
+    delete receivers_;
+    delete dir_;
+  }
+  static testing::TempDir* dir_;
+  static std::vector<Receiver>* receivers_;
+};
+testing::TempDir* HierarchyQueries::dir_ = nullptr;
+std::vector<Receiver>* HierarchyQueries::receivers_ = nullptr;
+
+TEST_F(HierarchyQueries, PcfThroughTheHierarchyEqualsPerTexelCounting) {
+  auto map = ShadowMap::open(dir_->path() / "s");
+  ASSERT_TRUE(map.ok());
+  const ShadowMap& m = **map;
+  int crossing = 0;
+  for (const Receiver& r : *receivers_) {
+    for (store::Method method : {store::Method::mh, store::Method::mmh}) {
+      for (unsigned k : {3u, 5u, 7u}) {
+        ShadowAnswer answer;
+        auto fast = m.query_pcf(r.position, method, k, {}, {}, &answer);
+        ASSERT_TRUE(fast.ok());
+        float threshold = float(answer.light.depth - m.frame().depth_from_world(m.meta().default_bias));
+        int64_t cu = int64_t(answer.light.u), cv = int64_t(answer.light.v), half = k / 2;
+        uint64_t lit = 0;
+        for (int64_t v = cv - half; v <= cv + half; ++v)
+          for (int64_t u = cu - half; u <= cu + half; ++u) {
+            if (u < 0 || v < 0 || u >= 1024 || v >= 1024) { ++lit; continue; }
+            auto value = m.texel_value(method, uint32_t(u), uint32_t(v));
+            ASSERT_TRUE(value.ok());
+            lit += threshold <= *value;
+          }
+        ASSERT_EQ(*fast, double(lit) / double(k * k)) << store::method_name(method) << " k=" << k;
+        if (k == 7 && (cu % 128 < 3 || cu % 128 > 124 || cv % 128 < 3 || cv % 128 > 124)) ++crossing;
+      }
+    }
+  }
+  EXPECT_GT(crossing, 20) << "kernels across tile borders are exercised";
+}
+
+TEST_F(HierarchyQueries, LosslessMethodsAnswerPointQueriesLikeRawUpToTheBias) {
+  // Raw compares with the entry depth; MH/MMH with a value inside [entry, exit - margin]. They may
+  // differ only where a receiver lies beyond the entry (inside or under a closed object, in which
+  // case the raw answer is the shadowed one and the lossless one may be lit only if the receiver is
+  // inside the solid). On the open bunny (upper == lower everywhere it is hit) they must agree.
+  auto map = ShadowMap::open(dir_->path() / "s");
+  ASSERT_TRUE(map.ok());
+  int differences = 0;
+  for (const Receiver& r : *receivers_) {
+    auto raw = (*map)->query(r.position, store::Method::raw);
+    auto mh = (*map)->query(r.position, store::Method::mh);
+    auto mmh = (*map)->query(r.position, store::Method::mmh);
+    ASSERT_TRUE(raw.ok() && mh.ok() && mmh.ok());
+    differences += raw->lit != mh->lit;
+    differences += raw->lit != mmh->lit;
+  }
+  EXPECT_EQ(differences, 0);
+}
+
+TEST_F(HierarchyQueries, CoarseLevelsComeFromTheTopTree) {
+  auto map = ShadowMap::open(dir_->path() / "s");
+  ASSERT_TRUE(map.ok());
+  auto store = store::Store::open(dir_->path() / "s", {});
+  ASSERT_TRUE(store.ok());
+  for (store::Method m : {store::Method::mh, store::Method::mmh}) {
+    auto top = (*store)->get(store::Database::top, store::as_bytes(top_tree_key(m)));
+    ASSERT_TRUE(top.ok() && top->has_value()) << "top tree stored for " << store::method_name(m);
+  }
+  // Every level answers; level 0 is one value for the whole map, so every receiver gets the same.
+  std::optional<float> level0;
+  for (const Receiver& r : *receivers_) {
+    for (unsigned level = 0; level < (*map)->level_count(); ++level) {
+      auto answer = (*map)->query(r.position, store::Method::mh, {}, level);
+      ASSERT_TRUE(answer.ok()) << level;
+      if (level == 0) {
+        if (!level0) level0 = answer->value;
+        EXPECT_EQ(answer->value, *level0);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace shadowtiles

@@ -1,0 +1,201 @@
+// MH construction + encoding + decoding: exhaustive losslessness on synthetic tiles, coarse-level
+// guarantees, input validation, skip list.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <tuple>
+
+#include "builder/mh_builder.hpp"
+#include "builder/mh_encoder.hpp"
+#include "builder/mh_synthetic.hpp"
+#include "builder/mh_verify.hpp"
+#include "client/mh_decoder.hpp"
+
+namespace shadowtiles {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+const MhSyntheticKind kKinds[] = {MhSyntheticKind::random_intervals, MhSyntheticKind::noisy_plane,
+                                  MhSyntheticKind::closed_plane,     MhSyntheticKind::steps,
+                                  MhSyntheticKind::all_miss,         MhSyntheticKind::boxes_and_misses};
+
+struct Encoded {
+  std::vector<uint8_t> bytes;
+  MhTileView view;
+};
+
+Encoded encode_and_parse(const TileIntervals& tile, MhConstruction construction, MhEncodeOptions encode = {}) {
+  auto h = build_mh(tile, {construction});
+  EXPECT_TRUE(h.ok()) << (h.ok() ? "" : h.error().message);
+  Encoded e;
+  auto bytes = encode_mh(*h, encode);
+  EXPECT_TRUE(bytes.ok());
+  e.bytes = std::move(*bytes);
+  auto view = MhTileView::parse(e.bytes);
+  EXPECT_TRUE(view.ok()) << (view.ok() ? "" : view.error().message);
+  if (view.ok()) e.view = *view;
+  return e;
+}
+
+// Reference bottom-up intervals of every node (dense, row-major per level), written independently
+// of the builder from the rule in DESIGN.md §5.
+std::vector<std::vector<DepthInterval>> reference_intervals(const TileIntervals& tile) {
+  unsigned L = 0;
+  while ((1u << L) < tile.size) ++L;
+  std::vector<std::vector<DepthInterval>> levels(L + 1);
+  levels[L] = tile.texels;
+  for (unsigned l = L; l-- > 0;) {
+    const uint32_t side = 1u << l;
+    levels[l].resize(size_t(side) * side);
+    for (uint32_t y = 0; y < side; ++y)
+      for (uint32_t x = 0; x < side; ++x) {
+        DepthInterval c[4];
+        for (unsigned i = 0; i < 4; ++i) c[i] = levels[l + 1][size_t(2 * y + i / 2) * 2 * side + 2 * x + i % 2];
+        int best = -1, best_count = -1;
+        for (int i = 0; i < 4; ++i) {
+          int count = 0;
+          for (int j = 0; j < 4; ++j) count += c[j].contains(c[i].lower);
+          if (count > best_count) best = i, best_count = count;
+        }
+        DepthInterval r{-kInf, kInf};
+        for (int i = 0; i < 4; ++i)
+          if (c[i].contains(c[best].lower)) r.lower = std::max(r.lower, c[i].lower), r.upper = std::min(r.upper, c[i].upper);
+        levels[l][size_t(y) * side + x] = r;
+      }
+  }
+  return levels;
+}
+
+using Param = std::tuple<MhConstruction, MhSyntheticKind, uint32_t>;
+class MhLossless : public ::testing::TestWithParam<Param> {};
+
+TEST_P(MhLossless, EveryTexelInsideItsInterval) {
+  const auto [construction, kind, size] = GetParam();
+  const TileIntervals tile = make_synthetic_tile(kind, size, 1234 + size);
+  Encoded e = encode_and_parse(tile, construction);
+  ASSERT_EQ(e.view.size(), size);
+  MhVerifyReport report;
+  Status s = verify_lossless(tile, e.view, &report);
+  EXPECT_TRUE(s.ok()) << (s.ok() ? "" : s.error().message);
+  EXPECT_EQ(report.texels, uint64_t(size) * size);
+  EXPECT_EQ(report.violations, 0u);
+  for (const float x : {e.view.lookup(0, 0), e.view.lookup(size - 1, size - 1)}) EXPECT_TRUE(std::isfinite(x));
+}
+
+std::string param_name(const ::testing::TestParamInfo<Param>& info) {
+  return std::string(std::get<0>(info.param) == MhConstruction::bottom_up ? "bottom_up" : "top_down") + "_" +
+         synthetic_kind_name(std::get<1>(info.param)) + "_" + std::to_string(std::get<2>(info.param));
+}
+
+INSTANTIATE_TEST_SUITE_P(Synthetic, MhLossless,
+                         ::testing::Combine(::testing::Values(MhConstruction::bottom_up, MhConstruction::top_down),
+                                            ::testing::ValuesIn(kKinds),
+                                            ::testing::Values(1u, 2u, 4u, 8u, 32u, 128u, 512u)),
+                         param_name);
+
+// Bottom-up coarse levels: at level m every texel of a level-m block reads the same value, that value
+// lies inside the block's reference interval, and it is exact for at least one texel of the block.
+TEST(MhCoarseLevels, EachLevelIsACompleteMapExactSomewhereInEachBlock) {
+  for (MhSyntheticKind kind : kKinds) {
+    for (uint32_t size : {1u, 2u, 16u, 64u}) {
+      const TileIntervals tile = make_synthetic_tile(kind, size, 77 + size);
+      Encoded e = encode_and_parse(tile, MhConstruction::bottom_up);
+      const auto ref = reference_intervals(tile);
+      const unsigned L = e.view.levels();
+      for (unsigned m = 0; m <= L; ++m) {
+        const uint32_t block = size >> m, side = 1u << m;
+        for (uint32_t by = 0; by < side; ++by)
+          for (uint32_t bx = 0; bx < side; ++bx) {
+            const float value = e.view.lookup(bx * block, by * block, m);
+            EXPECT_TRUE(ref[m][size_t(by) * side + bx].contains(value))
+                << synthetic_kind_name(kind) << " size " << size << " level " << m;
+            bool exact_somewhere = false;
+            for (uint32_t v = by * block; v < (by + 1) * block; ++v)
+              for (uint32_t u = bx * block; u < (bx + 1) * block; ++u) {
+                ASSERT_EQ(e.view.lookup(u, v, m), value);
+                exact_somewhere |= tile.at(u, v).contains(value);
+              }
+            EXPECT_TRUE(exact_somewhere) << synthetic_kind_name(kind) << " size " << size << " level " << m;
+          }
+      }
+      // Levels past the last one are the full map.
+      for (uint32_t v = 0; v < size; ++v)
+        for (uint32_t u = 0; u < size; ++u) ASSERT_EQ(e.view.lookup(u, v, L + 5), e.view.lookup(u, v));
+    }
+  }
+}
+
+TEST(MhBuild, RejectsMalformedInput) {
+  TileIntervals tile{3, std::vector<DepthInterval>(9)};
+  EXPECT_FALSE(build_mh(tile).ok());
+  tile = make_synthetic_tile(MhSyntheticKind::noisy_plane, 4, 1);
+  tile.texels[5].lower = std::nanf("");
+  EXPECT_FALSE(build_mh(tile).ok());
+  tile.texels[5] = {0.5f, 0.4f};
+  EXPECT_FALSE(build_mh(tile).ok());
+  tile.texels[5] = {-kInf, 0.4f};
+  EXPECT_FALSE(build_mh(tile).ok());
+  tile.texels.pop_back();
+  auto r = build_mh(tile);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::invalid_input);
+}
+
+TEST(MhBuild, AllMissIsARootLeafWithAFiniteValue) {
+  const TileIntervals tile = make_synthetic_tile(MhSyntheticKind::all_miss, 256, 1);
+  Encoded e = encode_and_parse(tile, MhConstruction::bottom_up);
+  EXPECT_EQ(e.view.stats().nodes(), 1u);
+  EXPECT_EQ(e.bytes.size(), e.view.stats().header_bytes);
+  EXPECT_EQ(e.view.lookup(17, 200), 1.0f);
+}
+
+TEST(MhBuild, RootSummaryIsTheRootInterval) {
+  const TileIntervals tile = make_synthetic_tile(MhSyntheticKind::closed_plane, 64, 5);
+  auto h = build_mh(tile);
+  ASSERT_TRUE(h.ok());
+  const auto ref = reference_intervals(tile);
+  EXPECT_EQ(summarize(*h).root.lower, ref[0][0].lower);
+  EXPECT_EQ(summarize(*h).root.upper, ref[0][0].upper);
+}
+
+// An embedded skip list is validated against the tree and gives identical lookups.
+TEST(MhSkipList, EmbeddedEqualsDerived) {
+  for (unsigned skip : {1u, 3u, 6u, 9u}) {
+    const TileIntervals tile = make_synthetic_tile(MhSyntheticKind::steps, 128, skip);
+    Encoded plain = encode_and_parse(tile, MhConstruction::bottom_up);
+    MhEncodeOptions options;
+    options.embed_skip_list = true;
+    options.skip_level = skip;
+    Encoded with = encode_and_parse(tile, MhConstruction::bottom_up, options);
+    EXPECT_EQ(with.view.stats().skip_level, std::min(skip, 7u));
+    EXPECT_GT(with.bytes.size(), plain.bytes.size());
+    for (uint32_t v = 0; v < 128; ++v)
+      for (uint32_t u = 0; u < 128; ++u)
+        for (unsigned m : {0u, 2u, 5u, 7u}) ASSERT_EQ(with.view.lookup(u, v, m), plain.view.lookup(u, v, m));
+    // A parse without any skip list agrees too.
+    MhParseOptions no_skip;
+    no_skip.skip_level = 0;
+    auto bare = MhTileView::parse(plain.bytes, no_skip);
+    ASSERT_TRUE(bare.ok());
+    for (uint32_t v = 0; v < 128; v += 3)
+      for (uint32_t u = 0; u < 128; u += 5) ASSERT_EQ(bare->lookup(u, v), plain.view.lookup(u, v));
+  }
+}
+
+TEST(MhEncode, ReferenceSizeCountsNodeTypes) {
+  const TileIntervals tile = make_synthetic_tile(MhSyntheticKind::steps, 64, 3);
+  auto h = build_mh(tile);
+  ASSERT_TRUE(h.ok());
+  const MhNodeCounts c = count_nodes(*h);
+  EXPECT_EQ(sbe16a_reference_bytes(*h), 8 * c.inner + 4 * (c.empty + c.leaves));
+  Encoded e = encode_and_parse(tile, MhConstruction::bottom_up);
+  EXPECT_EQ(e.view.stats().inner_nodes, c.inner);
+  EXPECT_EQ(e.view.stats().empty_nodes, c.empty);
+  EXPECT_EQ(e.view.stats().leaf_nodes, c.leaves);
+}
+
+}  // namespace
+}  // namespace shadowtiles
