@@ -393,6 +393,8 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
       {"scene", {{"triangles", scene->triangle_count()}, {"dropped", load_stats.dropped_triangles},
                  {"meshes", load_stats.meshes}, {"closed_meshes", load_stats.closed_meshes}}},
       {"rays", summary.rays},
+      {"hit_texels", totals.depth.hits},   // texels some geometry covers (this run's tiles)
+      {"exit_texels", totals.depth.exits}, // texels with a real exit (upper > lower)
       {"rays_per_second", render_wall > 0 ? double(summary.rays) / render_wall : 0.0},
       // Ray casting alone (BVH build excluded), per worker thread.
       {"rays_per_thread_second",

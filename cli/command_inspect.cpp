@@ -9,6 +9,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/exit_codes.hpp"
+#include "client/mh_decoder.hpp"
 #include "client/store_meta.hpp"
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
@@ -24,6 +25,10 @@ struct InspectFlags {
 
 struct MethodTotals {
   uint64_t tiles = 0, blob_bytes = 0, payload_bytes = 0;
+  // MH family, from decoding every tile.
+  bool hierarchical = false;
+  uint64_t inner = 0, empty = 0, leaves = 0, blocks = 0, block_references = 0, skip_list_bytes = 0;
+  unsigned levels = 0;
 };
 
 int run(const InspectFlags& flags) {
@@ -48,19 +53,46 @@ int run(const InspectFlags& flags) {
     ++t.tiles;
     t.blob_bytes += value.size();
     t.payload_bytes += header->raw_size;
+    if (tile_key->method == store::Method::mh || tile_key->method == store::Method::mmh) {
+      auto payload = store::decode_blob(value);
+      if (!payload) {
+        corrupt = payload.error();
+        return false;
+      }
+      auto view = MhTileView::parse(*payload);
+      if (!view) {
+        corrupt = view.error();
+        return false;
+      }
+      const MhStats& stats = view->stats();
+      t.hierarchical = true;
+      t.inner += stats.inner_nodes;
+      t.empty += stats.empty_nodes;
+      t.leaves += stats.leaf_nodes;
+      t.blocks += stats.blocks;
+      t.block_references += stats.block_references;
+      t.levels = std::max(t.levels, stats.levels);
+    }
     return true;
   });
   if (!walked) { spdlog::error("{}", walked.error().message); return exit_code_for(walked.error()); }
   if (!corrupt) { spdlog::error("{}", corrupt.error().message); return kCorruptStore; }
 
   const double texels = double(meta->resolution) * meta->resolution;
+  const double hit_texels = meta->build_stats.value("hit_texels", 0.0);
   nlohmann::json methods = nlohmann::json::object();
-  for (auto& [name, t] : totals)
+  for (auto& [name, t] : totals) {
     methods[name] = {{"tiles", t.tiles},
                      {"bytes", t.blob_bytes},
                      {"payload_bytes", t.payload_bytes},
                      {"bits_per_texel", 8.0 * double(t.blob_bytes) / texels},
+                     {"bytes_per_nonempty_texel", hit_texels > 0 ? double(t.blob_bytes) / hit_texels : 0.0},
                      {"ratio_vs_float32_map", double(t.blob_bytes) / (4.0 * texels)}};
+    if (t.hierarchical)
+      methods[name]["nodes"] = {{"inner", t.inner}, {"empty", t.empty}, {"leaf", t.leaves},
+                                {"blocks", t.blocks}, {"block_references", t.block_references},
+                                {"levels_in_tile", t.levels}};
+  }
   nlohmann::json report = {{"meta", meta->to_json()}, {"methods", methods}};
   if (flags.json) {
     std::cout << report.dump(2) << "\n";
@@ -74,6 +106,12 @@ int run(const InspectFlags& flags) {
     std::printf("%-8s %8llu %14llu %14llu %10.4f %10.4f\n", name.c_str(), (unsigned long long)t.tiles,
                 (unsigned long long)t.blob_bytes, (unsigned long long)t.payload_bytes,
                 8.0 * double(t.blob_bytes) / texels, double(t.blob_bytes) / (4.0 * texels));
+  for (auto& [name, t] : totals)
+    if (t.hierarchical)
+      std::printf("%-8s nodes: %llu inner, %llu empty, %llu leaf; %llu child blocks (%llu references); %u levels per tile\n",
+                  name.c_str(), (unsigned long long)t.inner, (unsigned long long)t.empty, (unsigned long long)t.leaves,
+                  (unsigned long long)t.blocks, (unsigned long long)t.block_references, t.levels);
+  if (hit_texels > 0) std::printf("non-empty texels: %.0f (bytes per non-empty texel in --json)\n", hit_texels);
   return kOk;
 }
 
