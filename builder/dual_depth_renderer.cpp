@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <chrono>
 #include <limits>
 #include <vector>
@@ -21,6 +22,7 @@ struct ClosedHit {
   uint32_t prim;
   bool front;
   bool heightfield;
+  float slack;  // how much shallower the triangle gets within half a texel (normalised depth)
 };
 
 // Per-geometry data the filter needs: which solid-bounding triangles face the light, and which
@@ -28,7 +30,20 @@ struct ClosedHit {
 struct ClosedGeometryData {
   std::vector<uint8_t> front;
   std::vector<uint8_t> heightfield;
+  std::vector<float> slack;
 };
+
+// Receivers on an exit surface lie anywhere in the texel, not only at its centre: on a surface
+// steep to the light their depth is up to half a texel's slope shallower than the centre's. The
+// exit is pulled back by that much (plus the margin), so they stay shadowed; a surface parallel to
+// the light gives infinite slack and the interval collapses to the entry (conservative).
+float exit_slack(const LightSpacePoint& a, const LightSpacePoint& b, const LightSpacePoint& c) {
+  double nx = (b.v - a.v) * (c.depth - a.depth) - (b.depth - a.depth) * (c.v - a.v);
+  double ny = (b.depth - a.depth) * (c.u - a.u) - (b.u - a.u) * (c.depth - a.depth);
+  double nz = (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
+  if (nz == 0) return std::numeric_limits<float>::infinity();
+  return float(0.5 * (std::fabs(nx) + std::fabs(ny)) / std::fabs(nz));
+}
 
 // Intersect context extended with per-lane hit lists: the filter sees ray ids, not lanes.
 struct CollectContext {
@@ -46,7 +61,8 @@ void collect_closed_hits(const RTCFilterFunctionNArguments* args) {
     unsigned lane = RTCRayN_id(args->ray, args->N, i);
     float t = RTCRayN_tfar(args->ray, args->N, i);
     uint32_t prim = RTCHitN_primID(args->hit, args->N, i);
-    (*context->lanes)[lane % kPacket].push_back({t, prim, data->front[prim] != 0, data->heightfield[prim] != 0});
+    (*context->lanes)[lane % kPacket].push_back(
+        {t, prim, data->front[prim] != 0, data->heightfield[prim] != 0, data->slack[prim]});
     args->valid[i] = 0;
   }
 }
@@ -86,6 +102,7 @@ TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile) 
       emit(geometry.closed_vertices, c);
       geometry.closed.front.push_back(faces_light(a, b, c) ? 1 : 0);
       geometry.closed.heightfield.push_back(kind == MeshKind::heightfield ? 1 : 0);
+      geometry.closed.slack.push_back(exit_slack(a, b, c));
     } else {
       emit(geometry.open_vertices, a);
       emit(geometry.open_vertices, b);
@@ -151,7 +168,7 @@ DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t
     if (hit.heightfield) heightfield_depth += hit.front ? 1 : -1;
     if (depth < 0) return interval;  // inconsistent: stay conservative
     if (depth == 0) {
-      interval.upper = std::max(interval.lower, hit.t - exit_margin);
+      interval.upper = std::max(interval.lower, hit.t - exit_margin - hit.slack);
       return interval;
     }
   }

@@ -3,8 +3,9 @@
 // - lower = first hit (entry);
 // - upper = where the ray leaves all closed meshes: closed-mesh hits are walked in depth order with
 //   a counter (+1 front-facing, -1 back-facing); where it returns to 0 is the exit. The exit is
-//   pulled back by `exit_margin` so that receivers lying on the exit surface (a box standing on a
-//   floor) stay shadowed for any query bias up to that margin;
+//   pulled back by `exit_margin` plus the exit surface's depth change over half a texel, so receivers
+//   anywhere on the exit surface within the texel (a floor under a box, the shadowed slope of a
+//   hill) stay shadowed for any query bias up to that margin;
 // - a first hit on an open mesh, a back-facing first hit, or a counter that never returns to 0
 //   before an open surface: upper = lower (conservative, never leaks light);
 // - heightfield meshes bound a solid closed by the far plane: they join the counter walk, so a ray

@@ -13,7 +13,7 @@ namespace shadowtiles::cli {
 namespace {
 
 struct BuildFlags {
-  std::string scene, out, sun, light_dir, methods = "raw", up = "z";
+  std::string scene, out, sun, light_dir, methods = "raw", up = "z", construction = "bottom-up";
   uint32_t resolution = 0;
   double texel_size = 0;
   uint32_t tile = 4096;
@@ -50,6 +50,11 @@ int run(const BuildFlags& flags) {
   auto methods = store::parse_method_list(flags.methods);
   if (!methods) { spdlog::error("--method: {}", methods.error().message); return kInvalidInput; }
   config.methods = *methods;
+  if (flags.construction == "top-down") config.construction = MhConstruction::top_down;
+  else if (flags.construction != "bottom-up") {
+    spdlog::error("--mh-construction must be bottom-up or top-down");
+    return kInvalidInput;
+  }
   config.bias_texels = flags.bias_texels;
   config.exit_margin_texels = flags.exit_margin_texels;
   config.overwrite = flags.overwrite;
@@ -103,6 +108,8 @@ void add_build_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--bias-texels", flags->bias_texels, "Default query bias in texel widths")->capture_default_str();
   cmd->add_option("--exit-margin-texels", flags->exit_margin_texels,
                   "Closed-mesh exits pulled back by this many texel widths (>= bias)")->capture_default_str();
+  cmd->add_option("--mh-construction", flags->construction, "MH family: bottom-up or top-down (SBE16a Alg. 1)")
+      ->capture_default_str();
   cmd->add_flag("--overwrite", flags->overwrite, "Replace a different build in --out");
   cmd->add_flag("--json", flags->json, "Print the build summary as JSON");
   cmd->add_option("--debug-kill-after-tiles", flags->kill_after, "Test hook: SIGKILL self after N tiles")

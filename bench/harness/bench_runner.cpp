@@ -1,0 +1,245 @@
+#include "bench/harness/bench_runner.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <random>
+
+#include <spdlog/spdlog.h>
+
+#include "bench/harness/accuracy_eval.hpp"
+#include "bench/harness/camera_receivers.hpp"
+#include "bench/harness/lookup_rate.hpp"
+#include "bench/harness/machine_info.hpp"
+#include "bench/harness/store_sizes.hpp"
+#include "builder/build_job.hpp"
+#include "builder/scene_loader.hpp"
+#include "builder/tile_encoder.hpp"
+
+namespace shadowtiles::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using Json = nlohmann::ordered_json;
+
+double stat(const nlohmann::json& stats, const char* group, const char* key) {
+  if (!stats.contains(group) || !stats[group].contains(key) || !stats[group][key].is_number()) return 0.0;
+  return stats[group][key].get<double>();
+}
+
+// The three visiting orders of the lookup-rate figures.
+struct PointOrders {
+  std::vector<Vec3> rows;    // uniform receivers sorted along light-space rows (v, then u)
+  std::vector<Vec3> random;  // the same receivers shuffled
+  std::vector<Vec3> camera;  // camera pixels in screen order
+};
+
+PointOrders make_orders(const LightFrame& frame, const std::vector<Receiver>& uniform,
+                        const std::vector<Receiver>& camera, uint64_t seed) {
+  PointOrders orders;
+  std::vector<std::pair<std::pair<double, double>, Vec3>> keyed;
+  for (const Receiver& r : uniform) {
+    LightSpacePoint p = frame.to_light(r.position);
+    keyed.push_back({{std::floor(p.v), p.u}, r.position});
+  }
+  std::sort(keyed.begin(), keyed.end(), [](auto& a, auto& b) { return a.first < b.first; });
+  for (auto& k : keyed) orders.rows.push_back(k.second);
+  orders.random = orders.rows;
+  std::shuffle(orders.random.begin(), orders.random.end(), std::mt19937_64(seed));
+  for (const Receiver& r : camera) orders.camera.push_back(r.position);
+  return orders;
+}
+
+struct SceneData {
+  Scene scene;
+  Vec3 light{};
+  std::vector<Receiver> uniform, camera;
+  std::vector<uint8_t> uniform_truth, camera_truth;
+};
+
+// Everything measured on one built store, per method: one row each.
+Status measure_store(const BenchConfig& config, const SceneSpec& spec, uint32_t resolution, SceneData& data,
+                     const GroundTruth& truth, const std::vector<store::Method>& methods,
+                     const nlohmann::json& build_stats, double build_peak_rss, const std::filesystem::path& store_dir,
+                     Json& rows) {
+  ShadowMap::Options options;
+  options.cache_bytes = size_t(config.cache_mib) << 20;
+  auto map = ShadowMap::open(store_dir, options);
+  if (!map) return map.error();
+  auto sizes = method_sizes(**map);
+  if (!sizes) return sizes.error();
+  auto nonempty = count_nonempty_texels(**map);
+  if (!nonempty) return nonempty.error();
+  const uint64_t float32_bytes = 4ull * resolution * resolution;
+
+  auto t0 = Clock::now();
+  std::map<unsigned, std::vector<float>> pcf_truths;
+  for (unsigned k : config.pcf_kernels)
+    pcf_truths[k] = pcf_truth(**map, truth, data.uniform, k, config.pcf_supersample, config.seed);
+  spdlog::info("  ground-truth PCF: {:.1f} s", std::chrono::duration<double>(Clock::now() - t0).count());
+  PointOrders orders = make_orders((*map)->frame(), data.uniform, data.camera, config.seed);
+
+  std::vector<uint8_t> raw_uniform, raw_camera;
+  for (store::Method method : methods) {
+    const char* name = store::method_name(method);
+    Json row;
+    row["scene"] = spec.name;
+    row["resolution"] = resolution;
+    row["tile_size"] = (*map)->layout().tile_size();
+    row["method"] = name;
+    const MethodSize size = sizes->count(method) ? sizes->at(method) : MethodSize{};
+    row["tiles"] = size.tiles;
+    row["blob_bytes"] = size.blob_bytes;
+    row["payload_bytes"] = size.payload_bytes;
+    row["float32_bytes"] = float32_bytes;
+    row["nonempty_texels"] = *nonempty;
+    row["bytes_per_nonempty_texel"] = *nonempty ? double(size.blob_bytes) / double(*nonempty) : 0.0;
+    row["bits_per_texel"] = 8.0 * double(size.blob_bytes) / (double(resolution) * resolution);
+    row["compression_ratio"] = size.blob_bytes ? double(float32_bytes) / double(size.blob_bytes) : 0.0;
+    // Build phases are of the one build that encoded every method (encode is their sum).
+    row["build_load_s"] = stat(build_stats, "seconds", "load");
+    row["build_index_s"] = stat(build_stats, "seconds", "index");
+    row["build_bvh_s"] = stat(build_stats, "seconds", "bvh_thread_sum");
+    row["build_rays_s"] = stat(build_stats, "seconds", "rays_thread_sum");
+    row["build_encode_s"] = stat(build_stats, "seconds", "encode_thread_sum");
+    row["build_store_s"] = stat(build_stats, "seconds", "store_thread_sum");
+    row["build_wall_s"] = stat(build_stats, "seconds", "total");
+    row["build_peak_rss_mib"] = build_peak_rss;
+
+    // Accuracy: raw first (methods are ordered so), the others compared with its answers.
+    const bool is_raw = method == store::Method::raw;
+    auto acc = point_accuracy(**map, method, data.uniform, data.uniform_truth, is_raw ? std::span<const uint8_t>{} : raw_uniform,
+                              is_raw ? &raw_uniform : nullptr);
+    if (!acc) return acc.error();
+    row["receivers"] = acc->receivers;
+    row["error_rate"] = acc->error_rate();
+    row["false_lit"] = acc->false_lit;
+    row["false_shadowed"] = acc->false_shadowed;
+    row["truth_lit"] = acc->truth_lit;
+    row["differs_from_raw"] = acc->differs_from_raw;
+    row["worse_than_raw"] = acc->worse_than_raw;
+    auto cam = point_accuracy(**map, method, data.camera, data.camera_truth, is_raw ? std::span<const uint8_t>{} : raw_camera,
+                              is_raw ? &raw_camera : nullptr);
+    if (!cam) return cam.error();
+    row["camera_receivers"] = cam->receivers;
+    row["camera_error_rate"] = cam->error_rate();
+    row["camera_false_lit"] = cam->false_lit;
+    row["camera_false_shadowed"] = cam->false_shadowed;
+    row["camera_differs_from_raw"] = cam->differs_from_raw;
+    row["camera_worse_than_raw"] = cam->worse_than_raw;
+    for (unsigned k : config.pcf_kernels) {
+      auto pcf = pcf_accuracy(**map, method, data.uniform, k, pcf_truths[k]);
+      if (!pcf) return pcf.error();
+      row["pcf" + std::to_string(k) + "_mae"] = pcf->mean_abs_error;
+    }
+
+    // Speed.
+    uint64_t misses = 0;
+    std::vector<unsigned> kernels{1};
+    kernels.insert(kernels.end(), config.pcf_kernels.begin(), config.pcf_kernels.end());
+    for (unsigned k : kernels) {
+      const std::string kind = k == 1 ? "point" : "pcf" + std::to_string(k);
+      for (auto& [order, points] : {std::pair<const char*, const std::vector<Vec3>*>{"rows", &orders.rows},
+                                    {"camera", &orders.camera}, {"random", &orders.random}}) {
+        for (unsigned threads : config.threads) {
+          auto rate = measure_lookup_rate(**map, method, *points, k, threads, config.min_seconds);
+          if (!rate) return rate.error();
+          row["lps_" + kind + "_" + order + "_t" + std::to_string(threads)] = rate->lookups_per_second;
+          misses += rate->cache_misses;
+        }
+      }
+    }
+    row["lookup_cache_misses"] = misses;
+    spdlog::info("  {} {}^2 {}: {} B, error {:.3f}%, point rows {:.2f} M/s", spec.name, resolution, name,
+                 size.blob_bytes, 100.0 * acc->error_rate(),
+                 row.value("lps_point_rows_t1", 0.0) / 1e6);
+    rows.push_back(std::move(row));
+  }
+  return {};
+}
+
+}  // namespace
+
+Status run_bench(const BenchConfig& config, const std::filesystem::path& out_dir, const std::filesystem::path& repo_dir,
+                 BenchRun& run) {
+  Json& doc = run.document;
+  doc["machine"] = machine_info(repo_dir);
+  doc["config"] = config.source;
+  doc["notes"] = Json::array();
+  doc["builds"] = Json::array();
+  doc["rows"] = Json::array();
+
+  // Methods: raw first (the reference the others are compared with), unsupported ones noted.
+  std::vector<store::Method> methods;
+  for (store::Method m : config.methods) {
+    if (!builder_supports(m)) {
+      std::string note = std::string("method '") + store::method_name(m) + "' skipped: the builder does not support it yet";
+      spdlog::warn("{}", note);
+      doc["notes"].push_back(note);
+      continue;
+    }
+    methods.push_back(m);
+  }
+  std::stable_partition(methods.begin(), methods.end(), [](store::Method m) { return m == store::Method::raw; });
+
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir / "stores", ec);
+  if (ec) return make_error(ErrorCode::io_error, "cannot create " + (out_dir / "stores").string() + ": " + ec.message());
+  auto device = EmbreeDevice::create();
+  if (!device) return device.error();
+
+  for (const SceneSpec& spec : config.scenes) {
+    spdlog::info("bench: scene {} ({})", spec.name, spec.file.string());
+    SceneData data;
+    LoadOptions load;
+    load.up = spec.up;
+    load.heightfield_meshes = spec.heightfield;
+    auto scene = load_scene(spec.file, load);
+    if (!scene) return scene.error();
+    data.scene = std::move(*scene);
+    auto light = light_direction_from_sun(spec.sun_azimuth, spec.sun_elevation, spec.up);
+    if (!light) return light.error();
+    data.light = *light;
+    data.uniform = sample_receivers(data.scene, spec.receivers, config.seed);
+    data.camera = camera_receivers(*device, data.scene, spec.up, spec.camera);
+    GroundTruth truth(*device, data.scene, data.light);
+    data.uniform_truth = point_truth(truth, data.uniform);
+    data.camera_truth = point_truth(truth, data.camera);
+    spdlog::info("  {} uniform receivers, {} camera receivers", data.uniform.size(), data.camera.size());
+
+    Json scene_rows = Json::array();
+    for (uint32_t resolution : spec.resolutions) {
+      const std::filesystem::path store_dir = out_dir / "stores" / (spec.name + "-" + std::to_string(resolution));
+      std::filesystem::remove_all(store_dir, ec);  // a fresh build, never a resumed one
+      BuildConfig build;
+      build.scene_path = spec.file;
+      build.store_path = store_dir;
+      build.light_direction = data.light;
+      build.resolution = resolution;
+      build.tile_size = std::min(config.tile_size, resolution);
+      build.threads = config.build_threads;
+      build.methods = methods;
+      build.load = load;
+      build.overwrite = true;
+      spdlog::info("  building {}^2 (tiles {}^2)", resolution, build.tile_size);
+      reset_peak_rss();
+      auto summary = run_build(build);
+      if (!summary) return summary.error();
+      const double peak = peak_rss_mib();
+      doc["builds"].push_back({{"scene", spec.name}, {"resolution", resolution}, {"peak_rss_mib", peak},
+                               {"stats", summary->stats}});
+      Json rows = Json::array();
+      Status measured = measure_store(config, spec, resolution, data, truth, methods, summary->stats, peak, store_dir, rows);
+      for (auto& r : rows) {
+        doc["rows"].push_back(r);
+        scene_rows.push_back(r);
+      }
+      if (!measured) return measured;
+      if (!config.keep_stores) std::filesystem::remove_all(store_dir, ec);
+    }
+    if (run.on_scene_done) run.on_scene_done(spec.name, scene_rows);
+  }
+  return {};
+}
+
+}  // namespace shadowtiles::bench

@@ -1,0 +1,31 @@
+// Lookup rate: how many shadow queries per second a ShadowMap answers through its public API
+// (world point -> light space -> cached tile -> decoded value), for point queries (kernel 1) or
+// PCF k x k, over a fixed list of points visited in the given order, on 1..n threads.
+// Method: one untimed warm-up pass over all points (so their tiles are decoded and cached), then
+// every thread walks the list cyclically (thread i starting at i/n of it, so each keeps the order's
+// coherence) until `min_seconds` of wall time have passed; rate = all lookups / wall time.
+// Cache misses during the timed loops are reported: non-zero means the cache budget is too small
+// for the points' tiles and the rate includes decoding.
+// Errors: the first query error (corrupt tile, unknown method).
+// Thread safety: the ShadowMap is shared by the threads (its cache is locked: this is measured too).
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "client/shadow_map.hpp"
+
+namespace shadowtiles::bench {
+
+struct LookupRate {
+  double lookups_per_second = 0;
+  uint64_t lookups = 0;
+  double seconds = 0;
+  uint64_t cache_misses = 0;  // during the timed loops
+};
+
+// `kernel` 1 = point query, else PCF kernel side (odd).
+Result<LookupRate> measure_lookup_rate(const ShadowMap& map, store::Method method, std::span<const Vec3> points,
+                                       unsigned kernel, unsigned threads, double min_seconds);
+
+}  // namespace shadowtiles::bench
