@@ -135,7 +135,8 @@ MeshClassification classify_mesh(std::span<const Vec3> vertices,
   return result;
 }
 
-double mesh_signed_volume(std::span<const Vec3> vertices, std::span<const std::array<uint32_t, 3>> triangles) {
+double mesh_signed_volume(std::span<const Vec3> vertices,
+                          std::span<const std::array<uint32_t, 3>> triangles) {
   if (vertices.empty()) return 0;
   // Tetrahedra against the first vertex rather than the origin: the same volume for a closed mesh,
   // without cancellation when the mesh sits far from the origin.

@@ -21,7 +21,7 @@
 namespace shadowtiles {
 
 struct MeshClassification {
-  MeshKind kind = MeshKind::open;  // closed or open (never heightfield: that is the caller's choice)
+  MeshKind kind = MeshKind::open;   // closed or open (never heightfield: that is the caller's choice)
   uint64_t edges = 0;               // distinct undirected edges after welding
   uint64_t boundary_edges = 0;      // used by one triangle (holes, borders)
   uint64_t non_manifold_edges = 0;  // used by three or more triangles

@@ -29,9 +29,12 @@ bool zero_area(const Vec3& a, const Vec3& b, const Vec3& c) {
 
 const char* mesh_kind_name(MeshKind kind) {
   switch (kind) {
-    case MeshKind::open: return "open";
-    case MeshKind::closed: return "closed";
-    case MeshKind::heightfield: return "heightfield";
+    case MeshKind::open:
+      return "open";
+    case MeshKind::closed:
+      return "closed";
+    case MeshKind::heightfield:
+      return "heightfield";
   }
   return "unknown";
 }
@@ -93,8 +96,7 @@ uint64_t Scene::add_mesh(const std::string& name, const std::vector<Vec3>& mesh_
     info.non_manifold_edges = c.non_manifold_edges;
     info.misoriented_edges = c.misoriented_edges;
     if (c.kind == MeshKind::closed)
-      info.signed_volume =
-          mesh_signed_volume(std::span<const Vec3>(vertices.data() + base, unique), kept);
+      info.signed_volume = mesh_signed_volume(std::span<const Vec3>(vertices.data() + base, unique), kept);
   }
 
   const uint32_t mesh_index = uint32_t(meshes.size());

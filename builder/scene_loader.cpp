@@ -66,13 +66,15 @@ Matrix multiply(const Matrix& a, const Matrix& b) {
 }
 
 double determinant3(const Matrix& m) {
-  return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+  return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+         m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
          m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
 }
 
 Vec3 transform(const Matrix& m, const aiVector3D& v) {
   const double x = v.x, y = v.y, z = v.z;
-  return {m[0][0] * x + m[0][1] * y + m[0][2] * z + m[0][3], m[1][0] * x + m[1][1] * y + m[1][2] * z + m[1][3],
+  return {m[0][0] * x + m[0][1] * y + m[0][2] * z + m[0][3],
+          m[1][0] * x + m[1][1] * y + m[1][2] * z + m[1][3],
           m[2][0] * x + m[2][1] * y + m[2][2] * z + m[2][3]};
 }
 
@@ -111,7 +113,8 @@ class HeightfieldMatcher {
     for (size_t p = 0; p < patterns_.size(); ++p) {
       if (used_[p]) continue;
       std::string names;
-      for (size_t m = 0; m < scene.meshes.size() && m < 20; ++m) names += (m ? ", " : "") + scene.meshes[m].name;
+      for (size_t m = 0; m < scene.meshes.size() && m < 20; ++m)
+        names += (m ? ", " : "") + scene.meshes[m].name;
       if (scene.meshes.size() > 20) names += fmt::format(", ... ({} meshes)", scene.meshes.size());
       return make_error(ErrorCode::invalid_input,
                         fmt::format("{}: heightfield mesh '{}' matches no mesh; meshes: {}", file.string(),
@@ -126,7 +129,8 @@ class HeightfieldMatcher {
 };
 
 Error too_big(const std::filesystem::path& file) {
-  return make_error(ErrorCode::invalid_input, fmt::format("{}: more than 2^32 - 1 triangles or vertices", file.string()));
+  return make_error(ErrorCode::invalid_input,
+                    fmt::format("{}: more than 2^32 - 1 triangles or vertices", file.string()));
 }
 
 // Walks assimp's node tree (iteratively: a hostile file can nest deeply) and adds every mesh instance.
@@ -164,7 +168,8 @@ Result<Scene> convert(const aiScene& ai, const std::filesystem::path& file, Heig
       vertices.clear();
       triangles.clear();
       vertices.reserve(mesh.mNumVertices);
-      for (unsigned v = 0; v < mesh.mNumVertices; ++v) vertices.push_back(transform(item.world, mesh.mVertices[v]));
+      for (unsigned v = 0; v < mesh.mNumVertices; ++v)
+        vertices.push_back(transform(item.world, mesh.mVertices[v]));
       uint64_t polygons = 0;  // left after aiProcess_Triangulate: should not happen; counted as dropped
       for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
         const aiFace& face = mesh.mFaces[f];
@@ -196,7 +201,8 @@ Result<Scene> convert(const aiScene& ai, const std::filesystem::path& file, Heig
     }
     for (unsigned c = node.mNumChildren; c-- > 0;)  // reversed: children pop in file order
       if (node.mChildren && node.mChildren[c])
-        stack.push_back({node.mChildren[c], multiply(item.world, to_matrix(node.mChildren[c]->mTransformation)),
+        stack.push_back({node.mChildren[c],
+                         multiply(item.world, to_matrix(node.mChildren[c]->mTransformation)),
                          item.depth + 1});
   }
   return scene;
@@ -273,15 +279,17 @@ Status check_ply(const std::filesystem::path& file, uint64_t file_size) {
       const std::string_view type = words[1] == "list" ? words[2] : words[1];
       uint64_t bytes = 1;
       if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") bytes = 2;
-      if (type == "int" || type == "uint" || type == "int32" || type == "uint32" || type == "float" || type == "float32")
+      if (type == "int" || type == "uint" || type == "int32" || type == "uint32" || type == "float" ||
+          type == "float32")
         bytes = 4;
       if (type == "double" || type == "float64") bytes = 8;
       element_bytes += ascii ? 2 : bytes;
     } else if (words[0] == "end_header") {
       minimum = saturating_mul_add(minimum, element_count, element_bytes);
       if (minimum > file_size - std::min<uint64_t>(file_size, pos))
-        return fail(fmt::format("the header declares at least {} bytes of data, the file has {} (truncated or corrupt)",
-                                minimum, file_size - std::min<uint64_t>(file_size, pos)));
+        return fail(fmt::format(
+            "the header declares at least {} bytes of data, the file has {} (truncated or corrupt)", minimum,
+            file_size - std::min<uint64_t>(file_size, pos)));
       return Status::success();
     }
   }
@@ -322,8 +330,9 @@ Result<Scene> import_with_assimp(const std::filesystem::path& file, const std::s
   if (extension.empty() || !importer.IsExtensionSupported(extension)) {
     std::string list;
     importer.GetExtensionList(list);
-    return make_error(ErrorCode::unsupported, fmt::format("{}: no importer for the extension '{}' (known: {})",
-                                                          file.string(), extension, list));
+    return make_error(
+        ErrorCode::unsupported,
+        fmt::format("{}: no importer for the extension '{}' (known: {})", file.string(), extension, list));
   }
 
   std::error_code ec;
@@ -357,11 +366,14 @@ Result<Scene> import_with_assimp(const std::filesystem::path& file, const std::s
       for (unsigned f = 0; mesh && mesh->mFaces && f < mesh->mNumFaces && !any_polygon; ++f)
         any_polygon = mesh->mFaces[f].mNumIndices >= 3;
     }
-    if (!any_polygon) return make_error(ErrorCode::invalid_input, fmt::format("{}: no triangles (only points or lines)", file.string()));
+    if (!any_polygon)
+      return make_error(ErrorCode::invalid_input,
+                        fmt::format("{}: no triangles (only points or lines)", file.string()));
     // Validation first (assimp runs it before the other steps): bad indices, null arrays.
     ai = importer.ApplyPostProcessing(aiProcess_ValidateDataStructure | aiProcess_Triangulate);
   } catch (const std::bad_alloc&) {
-    return make_error(ErrorCode::invalid_input, fmt::format("{}: out of memory while importing", file.string()));
+    return make_error(ErrorCode::invalid_input,
+                      fmt::format("{}: out of memory while importing", file.string()));
   } catch (const std::exception& e) {
     return make_error(ErrorCode::invalid_input, fmt::format("{}: {}", file.string(), e.what()));
   } catch (...) {
@@ -418,8 +430,10 @@ Result<Scene> read_terragen(const std::filesystem::path& file, HeightfieldMatche
     if (chunk == "SIZE" || chunk == "XPTS" || chunk == "YPTS") {
       if (!has(2)) return fail("truncated " + chunk);
       const uint32_t v = uint16_t(i16());
-      if (chunk == "SIZE") nx = ny = v + 1;
-      else (chunk == "XPTS" ? nx : ny) = v;
+      if (chunk == "SIZE")
+        nx = ny = v + 1;
+      else
+        (chunk == "XPTS" ? nx : ny) = v;
     } else if (chunk == "SCAL") {
       if (!has(12)) return fail("truncated SCAL");
       for (double& s : scale) s = f32();
@@ -428,14 +442,16 @@ Result<Scene> read_terragen(const std::filesystem::path& file, HeightfieldMatche
       pos += 4;
     } else if (chunk == "CRVM") {
       if (!has(1)) return fail("truncated CRVM");
-      if (data[pos] != 0) spdlog::warn("{}: Terragen spherical mapping ignored; loading the terrain flat", file.string());
+      if (data[pos] != 0)
+        spdlog::warn("{}: Terragen spherical mapping ignored; loading the terrain flat", file.string());
       pos += 1;
     } else if (chunk == "ALTW") {
       if (!has(4)) return fail("truncated ALTW");
       height_scale = i16() / 65536.0;
       base_height = i16();
       if (nx < 2 || ny < 2) return fail(fmt::format("invalid terrain size {} x {}", nx, ny));
-      if (!has(size_t(nx) * ny * 2)) return fail(fmt::format("ALTW holds fewer than {} x {} samples", nx, ny));
+      if (!has(size_t(nx) * ny * 2))
+        return fail(fmt::format("ALTW holds fewer than {} x {} samples", nx, ny));
       samples = pos;
       pos += size_t(nx) * ny * 2;
     } else {
@@ -479,17 +495,20 @@ Result<Scene> load_scene(const std::filesystem::path& file, const LoadOptions& o
     return make_error(ErrorCode::invalid_input, fmt::format("scene file is a directory: {}", file.string()));
 
   std::string extension = file.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   HeightfieldMatcher matcher(options.heightfield_meshes);
-  Result<Scene> loaded = extension == ".ter" ? read_terragen(file, matcher) : import_with_assimp(file, extension, matcher);
+  Result<Scene> loaded =
+      extension == ".ter" ? read_terragen(file, matcher) : import_with_assimp(file, extension, matcher);
   if (!loaded) return loaded;
   Scene& scene = loaded.value();
   if (scene.triangles.empty()) {
     uint64_t dropped = 0;
     for (const MeshInfo& m : scene.meshes) dropped += m.dropped_triangles;
-    return make_error(ErrorCode::invalid_input,
-                      fmt::format("{}: no triangles ({} meshes, {} triangles dropped as degenerate or malformed)",
-                                  file.string(), scene.meshes.size(), dropped));
+    return make_error(
+        ErrorCode::invalid_input,
+        fmt::format("{}: no triangles ({} meshes, {} triangles dropped as degenerate or malformed)",
+                    file.string(), scene.meshes.size(), dropped));
   }
   if (Status status = matcher.check_all_used(scene, file); !status) return status.error();
 
@@ -500,28 +519,35 @@ Result<Scene> load_scene(const std::filesystem::path& file, const LoadOptions& o
   for (const MeshInfo& m : scene.meshes) {
     s.dropped_triangles += m.dropped_triangles;
     switch (m.kind) {
-      case MeshKind::closed: ++s.closed_meshes; break;
-      case MeshKind::open: ++s.open_meshes; break;
-      case MeshKind::heightfield: ++s.heightfield_meshes; break;
+      case MeshKind::closed:
+        ++s.closed_meshes;
+        break;
+      case MeshKind::open:
+        ++s.open_meshes;
+        break;
+      case MeshKind::heightfield:
+        ++s.heightfield_meshes;
+        break;
     }
     boundary += m.boundary_edges;
     non_manifold += m.non_manifold_edges;
     misoriented += m.misoriented_edges;
     if (m.kind == MeshKind::closed && m.signed_volume < 0) ++inside_out;
-    spdlog::debug("  mesh '{}': {} triangles, {} dropped, {} (boundary {}, non-manifold {}, misoriented {}){}",
-                  m.name, m.triangle_count, m.dropped_triangles, mesh_kind_name(m.kind), m.boundary_edges,
-                  m.non_manifold_edges, m.misoriented_edges,
-                  m.kind == MeshKind::closed && m.signed_volume < 0 ? ", inside out" : "");
+    spdlog::debug(
+        "  mesh '{}': {} triangles, {} dropped, {} (boundary {}, non-manifold {}, misoriented {}){}", m.name,
+        m.triangle_count, m.dropped_triangles, mesh_kind_name(m.kind), m.boundary_edges, m.non_manifold_edges,
+        m.misoriented_edges, m.kind == MeshKind::closed && m.signed_volume < 0 ? ", inside out" : "");
   }
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   spdlog::info("loaded {}: {} triangles ({} dropped), {} meshes, bounds {}, {} up, {:.2f} s", file.string(),
                s.triangles, s.dropped_triangles, s.meshes, format_bounds(scene.bounds),
                options.up == UpAxis::z ? "z" : "y", s.seconds);
-  spdlog::info("  meshes: {} closed{}, {} open (edges: {} boundary, {} non-manifold, {} misoriented), "
-               "{} heightfield",
-               s.closed_meshes, inside_out ? fmt::format(" ({} inside out)", inside_out) : "", s.open_meshes,
-               boundary, non_manifold, misoriented, s.heightfield_meshes);
+  spdlog::info(
+      "  meshes: {} closed{}, {} open (edges: {} boundary, {} non-manifold, {} misoriented), "
+      "{} heightfield",
+      s.closed_meshes, inside_out ? fmt::format(" ({} inside out)", inside_out) : "", s.open_meshes, boundary,
+      non_manifold, misoriented, s.heightfield_meshes);
   if (stats) *stats = s;
   return loaded;
 }

@@ -2,7 +2,7 @@
 // MeshInfo per mesh instance, each classified closed/open (DESIGN.md §4) or declared a heightfield.
 //
 // Formats: everything assimp 5.2 imports, chosen by file extension: OBJ, PLY (ascii and binary),
-// glTF 2.0 (.gltf, .glb), FBX, Collada (.dae), IFC, STL, OFF, 3DS, Terragen (.ter), ...
+// glTF 2.0 (.gltf, .glb), FBX, Collada (.dae), IFC, STL, OFF, 3DS, ...; Terragen (.ter) by our own reader.
 // Only triangles are kept (polygons are triangulated; points and lines are ignored).
 // Node transforms are composed and applied in double here rather than by assimp's
 // aiProcess_PreTransformVertices, for two reasons: every mesh instance keeps its node name (for
@@ -20,22 +20,26 @@
 // triangles, bounds [0, 0, -79.0] .. [7680, 7680, 874.5], identical to scenes/terragen's .ply.
 // Declare it a heightfield (LoadOptions::heightfield_meshes = {"RealisticTerrain"} or {"*"}).
 // Mesh names: "<node>/<mesh>" (or just one of them when the other is empty or equal), the file stem
-// when both are empty (PLY, STL); repeats get "#2", "#3"... A heightfield entry matches a mesh instance by its
-// full name, its node name or its mesh name; "*" matches all.
+// when both are empty (PLY, STL); repeats get "#2", "#3"... A heightfield entry matches a mesh instance by
+// its full name, its node name or its mesh name; "*" matches all.
 //
 // Errors: not_found when the file does not exist; unsupported when no importer handles its
 // extension (the format is chosen by extension only); io_error when it cannot be read;
-// invalid_input when assimp (or the .ter reader) fails (the message carries the file name and assimp's message,
-// which often names the line), when nothing but points/lines/degenerate triangles remain ("no
+// invalid_input when assimp (or the .ter reader) fails (the message carries the file name and assimp's
+// message, which often names the line), when nothing but points/lines/degenerate triangles remain ("no
 // triangles"), when a heightfield name matches no mesh (the message lists the meshes), or when the
 // scene exceeds 2^32 - 1 vertices or triangles.
 // Logging: spdlog info per scene (triangles, dropped, bounds, seconds, classification summary),
 // debug per mesh. assimp's own log goes to spdlog at debug level (a process-wide assimp logger is
 // installed on first use).
 // Thread safety: load_scene may run concurrently on different files (one assimp Importer each).
-// Untrusted input: meant to be safe (no crash, errors returned): assimp exceptions and bad_alloc
-// are caught, assimp's data-structure validation runs, every index is checked. assimp's own parsers
-// are the weak point: a hostile file may still make assimp use much memory or time.
+// Untrusted input: meant to be safe (no crash, no hang, errors returned), but assimp's parsers are
+// the weak point. Done here: assimp exceptions and bad_alloc are caught, assimp's data-structure
+// validation runs, every index is checked; PLY headers without "end_header" (which hang assimp 5.2)
+// and PLY/OFF element counts beyond what the file size can hold (which make assimp allocate
+// gigabytes) are rejected before assimp sees them; .ter is parsed by our own bounds-checked reader.
+// Known left: assimp's PLY importer leaks its parse tree when a binary file ends early (bounded by
+// the file size), and formats not listed above may still make assimp use much memory or time.
 #pragma once
 
 #include <cstdint>
@@ -64,7 +68,7 @@ struct LoadStats {
   uint64_t closed_meshes = 0;
   uint64_t open_meshes = 0;
   uint64_t heightfield_meshes = 0;
-  double seconds = 0;              // wall time of the whole load
+  double seconds = 0;  // wall time of the whole load
 };
 
 // Loads `file`. `stats`, when given, is filled on success (and left untouched on error).

@@ -16,12 +16,14 @@ using Triangles = std::vector<std::array<uint32_t, 3>>;
 // Unit cube, 8 shared vertices, 12 triangles, counter-clockwise seen from outside.
 std::vector<Vec3> cube_vertices(double offset = 0) {
   std::vector<Vec3> v;
-  for (int i = 0; i < 8; ++i) v.push_back({double(i & 1) + offset, double((i >> 1) & 1), double((i >> 2) & 1)});
+  for (int i = 0; i < 8; ++i)
+    v.push_back({double(i & 1) + offset, double((i >> 1) & 1), double((i >> 2) & 1)});
   return v;
 }
 Triangles cube_triangles() {
   // Faces as quads (outward counter-clockwise), split into two triangles each.
-  const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   Triangles t;
   for (const auto& q : quads) {
     t.push_back({q[0], q[1], q[2]});
@@ -185,17 +187,17 @@ TEST(SceneAddMesh, DropsMalformedTriangles) {
   v.push_back({0.5, 0.5, 0});    // 10: on the edge 0-3 diagonal of face z = 0
   v.push_back({1e9, 1e9, 1e9});  // 11: unused, must not reach the bounds
   Triangles t = cube_triangles();
-  t.push_back({0, 1, 8});    // NaN corner
-  t.push_back({0, 9, 1});    // infinite corner
-  t.push_back({0, 1, 42});   // out of range
-  t.push_back({2, 2, 3});    // repeated index
-  t.push_back({0, 3, 10});   // collinear: zero area
+  t.push_back({0, 1, 8});   // NaN corner
+  t.push_back({0, 9, 1});   // infinite corner
+  t.push_back({0, 1, 42});  // out of range
+  t.push_back({2, 2, 3});   // repeated index
+  t.push_back({0, 3, 10});  // collinear: zero area
   Scene scene;
   EXPECT_EQ(scene.add_mesh("dirty", v, t), 5u);
   EXPECT_EQ(scene.meshes[0].dropped_triangles, 5u);
   EXPECT_EQ(scene.triangle_count(), 12u);
   EXPECT_EQ(scene.meshes[0].kind, MeshKind::closed);  // what is left is the intact cube
-  EXPECT_EQ(scene.vertices.size(), 8u);              // unused and dropped-only vertices not stored
+  EXPECT_EQ(scene.vertices.size(), 8u);               // unused and dropped-only vertices not stored
   EXPECT_EQ(scene.bounds.max, (Vec3{1, 1, 1}));
 }
 
@@ -203,7 +205,8 @@ TEST(SceneAddMesh, ZeroAreaThresholdIsRelative) {
   // A sliver whose height is 1e-6 of its length is kept at any scale; one at 1e-13 is dropped.
   for (double scale : {1e-6, 1.0, 1e6}) {
     Scene scene;
-    const std::vector<Vec3> v{{0, 0, 0}, {scale, 0, 0}, {0.5 * scale, 1e-6 * scale, 0}, {0.5 * scale, 1e-13 * scale, 0}};
+    const std::vector<Vec3> v{
+        {0, 0, 0}, {scale, 0, 0}, {0.5 * scale, 1e-6 * scale, 0}, {0.5 * scale, 1e-13 * scale, 0}};
     EXPECT_EQ(scene.add_mesh("sliver", v, Triangles{{0, 1, 2}, {0, 1, 3}}), 1u) << scale;
   }
 }
