@@ -3,6 +3,7 @@
 #include <chrono>
 #include <optional>
 
+#include "builder/dagmh_encoder.hpp"
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_hierarchy.hpp"
 #include "builder/mmh_merger.hpp"
@@ -17,7 +18,8 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 }  // namespace
 
 bool builder_supports(store::Method method) {
-  return method == store::Method::raw || method == store::Method::mh || method == store::Method::mmh;
+  return method == store::Method::raw || method == store::Method::mh || method == store::Method::mmh ||
+         method == store::Method::dagmh;
 }
 
 Result<TileEncoding> encode_tile(const std::vector<store::Method>& methods, const TileIntervals& intervals,
@@ -62,6 +64,13 @@ Result<TileEncoding> encode_tile(const std::vector<store::Method>& methods, cons
         if (!bytes) return bytes.error();
         out.payload = std::move(*bytes);
         out.reference_bytes = sbe16a_reference_bytes(*merged);
+        break;
+      }
+      case store::Method::dagmh: {
+        if (Status s = ensure_mh(); !s) return s.error();
+        auto bytes = encode_dagmh(*mh);
+        if (!bytes) return bytes.error();
+        out.payload = std::move(*bytes);
         break;
       }
       default:

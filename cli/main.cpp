@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   shadowtiles::cli::add_query_command(app, exit_code);
   shadowtiles::cli::add_inspect_command(app, exit_code);
   shadowtiles::cli::add_verify_command(app, exit_code);
+  shadowtiles::cli::add_serve_command(app, exit_code);
   shadowtiles::cli::add_bench_command(app, exit_code);
   app.parse_complete_callback([&] {
     spdlog::set_level(verbose ? spdlog::level::debug : quiet ? spdlog::level::warn : spdlog::level::info);

@@ -1,5 +1,6 @@
 #include "client/decoded_tile.hpp"
 
+#include "client/dagmh_decoder.hpp"
 #include "client/mh_decoder.hpp"
 #include "client/raw_tile.hpp"
 
@@ -43,6 +44,31 @@ class MhDecodedTile final : public DecodedTile {
   MhTileView view_;
 };
 
+// DAG-MH: topology DAG + treelets + chunked values; same lookups through its own view.
+class DagMhDecodedTile final : public DecodedTile {
+ public:
+  static Result<std::shared_ptr<const DecodedTile>> make(std::span<const uint8_t> payload) {
+    auto tile = std::shared_ptr<DagMhDecodedTile>(new DagMhDecodedTile(payload));
+    auto view = DagMhTileView::parse(tile->payload_);
+    if (!view) return view.error();
+    tile->view_ = std::move(*view);
+    return std::shared_ptr<const DecodedTile>(std::move(tile));
+  }
+  uint32_t size() const override { return view_.size(); }
+  float value(uint32_t u, uint32_t v, unsigned max_level) const override {
+    return view_.lookup(u, v, max_level == 255 ? kDagMhAllLevels : max_level);
+  }
+  size_t memory_bytes() const override { return payload_.size() + sizeof(*this); }
+  uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const override {
+    return view_.pcf_lit_count(u0, v0, kw, kh, threshold, 0.0f);
+  }
+
+ private:
+  explicit DagMhDecodedTile(std::span<const uint8_t> payload) : payload_(payload.begin(), payload.end()) {}
+  std::vector<uint8_t> payload_;
+  DagMhTileView view_;
+};
+
 }  // namespace
 
 uint32_t DecodedTile::lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const {
@@ -62,6 +88,8 @@ Result<std::shared_ptr<const DecodedTile>> decode_tile(store::Method method, std
     case store::Method::mh:
     case store::Method::mmh:
       return MhDecodedTile::make(payload);
+    case store::Method::dagmh:
+      return DagMhDecodedTile::make(payload);
     default:
       return make_error(ErrorCode::unsupported,
                         std::string("no decoder for method '") + store::method_name(method) + "'");

@@ -33,7 +33,7 @@ BuildConfig config_for(const SceneCase& scene, const std::filesystem::path& out,
   config.load.up = scene.up;
   if (scene.heightfield) config.load.heightfield_meshes = {"*"};
   config.light_direction = *light_direction_from_sun(135, 40, scene.up);
-  config.methods = {store::Method::raw, store::Method::mh, store::Method::mmh};
+  config.methods = {store::Method::raw, store::Method::mh, store::Method::mmh, store::Method::dagmh};
   return config;
 }
 
@@ -48,10 +48,11 @@ void expect_lossless(const SceneCase& scene, uint32_t resolution, uint32_t tile)
   load.heightfield_meshes = (*map)->meta().heightfield_meshes;
   auto loaded = load_scene(testing::shared_scene(scene.file), load);
   ASSERT_TRUE(loaded.ok());
-  auto report = verify_store(**map, *loaded, {store::Method::raw, store::Method::mh, store::Method::mmh});
+  auto report = verify_store(**map, *loaded,
+                             {store::Method::raw, store::Method::mh, store::Method::mmh, store::Method::dagmh});
   ASSERT_TRUE(report.ok()) << report.error().message;
   const auto& bytes = summary->stats["bytes_by_method"];
-  for (store::Method m : {store::Method::mh, store::Method::mmh}) {
+  for (store::Method m : {store::Method::mh, store::Method::mmh, store::Method::dagmh}) {
     const MethodVerification& v = report->methods.at(m);
     EXPECT_EQ(v.texels, uint64_t(resolution) * resolution) << "every texel of the map is checked";
     EXPECT_EQ(v.outside, 0u) << store::method_name(m) << ": " << v.first_violation;
@@ -59,10 +60,12 @@ void expect_lossless(const SceneCase& scene, uint32_t resolution, uint32_t tile)
   }
   EXPECT_LE(bytes["mmh"].get<uint64_t>(), bytes["mh"].get<uint64_t>()) << "merging never grows a tile";
   if (scene.expect_smaller_than_raw) EXPECT_LT(bytes["mh"].get<uint64_t>(), bytes["raw"].get<uint64_t>());
-  std::printf("[ figures  ] %s %u^2 tiles %u: bytes raw %llu mh %llu mmh %llu (mmh/mh %.3f)\n", scene.file, resolution,
-              tile, (unsigned long long)bytes["raw"].get<uint64_t>(), (unsigned long long)bytes["mh"].get<uint64_t>(),
-              (unsigned long long)bytes["mmh"].get<uint64_t>(),
-              double(bytes["mmh"].get<uint64_t>()) / double(bytes["mh"].get<uint64_t>()));
+  std::printf("[ figures  ] %s %u^2 tiles %u: bytes raw %llu mh %llu mmh %llu dagmh %llu (mmh/mh %.3f dagmh/mmh %.3f)\n",
+              scene.file, resolution, tile, (unsigned long long)bytes["raw"].get<uint64_t>(),
+              (unsigned long long)bytes["mh"].get<uint64_t>(), (unsigned long long)bytes["mmh"].get<uint64_t>(),
+              (unsigned long long)bytes["dagmh"].get<uint64_t>(),
+              double(bytes["mmh"].get<uint64_t>()) / double(bytes["mh"].get<uint64_t>()),
+              double(bytes["dagmh"].get<uint64_t>()) / double(bytes["mmh"].get<uint64_t>()));
 }
 
 TEST(LosslessStores, NefertitiClosedMeshAt4096) { expect_lossless({"nefertiti/nefertiti.obj", UpAxis::z, false}, 4096, 1024); }
@@ -95,7 +98,7 @@ TEST_F(HierarchyQueries, PcfThroughTheHierarchyEqualsPerTexelCounting) {
   const ShadowMap& m = **map;
   int crossing = 0;
   for (const Receiver& r : *receivers_) {
-    for (store::Method method : {store::Method::mh, store::Method::mmh}) {
+    for (store::Method method : {store::Method::mh, store::Method::mmh, store::Method::dagmh}) {
       for (unsigned k : {3u, 5u, 7u}) {
         ShadowAnswer answer;
         auto fast = m.query_pcf(r.position, method, k, {}, {}, &answer);

@@ -1,0 +1,128 @@
+#!/usr/bin/env bash
+# Load benchmark of `shadowtiles serve` on loopback (not a unit test; DESIGN.md §10, issue 5).
+# Builds a store, starts the server (default 2 threads), then measures, each bounded in time:
+#   1. single-point GET /v1/shadow at random points of the scene's box   (wrk, Lua)
+#   2. tile GET /v1/tiles/{method}/{z}/{x}/{y} over every tile position   (wrk, Lua)
+#   3. binary POST /v1/shadow batches of 100k float32 points              (curl, 5 runs)
+# and prints requests/s, p50/p99 latency and points/s. The server is always killed at the end.
+# wrk and the server share the machine: on a 2-core box the figures are a lower bound.
+#
+# Usage: bench/server_load.sh [BUILD_DIR] [SCENE] [RESOLUTION] [TILE]
+#   defaults: build  ../shared/scenes/bunny/stanford-bunny.obj  2048  512
+# Env: DURATION (wrk seconds per run, default 10), CONNECTIONS (wrk connection counts to run, default
+#      "2 16": one per server thread, then more keep-alive clients than threads, which queue:
+#      httplib serves one connection per thread), THREADS (server, default 2),
+#      METHOD (default raw), UP (scene up axis, default y).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD_DIR=${1:-build}
+SCENE=${2:-../shared/scenes/bunny/stanford-bunny.obj}
+RESOLUTION=${3:-2048}
+TILE=${4:-512}
+DURATION=${DURATION:-10}
+CONNECTIONS=${CONNECTIONS:-2 16}
+THREADS=${THREADS:-2}
+METHOD=${METHOD:-raw}
+UP=${UP:-y}
+CLI="$BUILD_DIR/cli/shadowtiles"
+
+for tool in wrk curl python3; do
+  command -v "$tool" > /dev/null || { echo "needs $tool (apt-get install -y wrk curl python3)" >&2; exit 2; }
+done
+[ -x "$CLI" ] || { echo "no $CLI: build first (bash scripts/build.sh)" >&2; exit 2; }
+
+WORK=$(mktemp -d)
+SERVER_PID=""
+cleanup() {
+  if [ -n "$SERVER_PID" ] && kill -0 "$SERVER_PID" 2> /dev/null; then
+    kill -TERM "$SERVER_PID" 2> /dev/null || true
+    for _ in $(seq 50); do kill -0 "$SERVER_PID" 2> /dev/null || break; sleep 0.1; done
+    kill -KILL "$SERVER_PID" 2> /dev/null || true
+  fi
+  rm -rf "$WORK"
+}
+trap cleanup EXIT INT TERM
+
+echo "== building $SCENE at ${RESOLUTION}^2, tiles ${TILE}^2, method $METHOD"
+"$CLI" build "$SCENE" --up "$UP" --resolution "$RESOLUTION" --tile "$TILE" --method "$METHOD" \
+  --out "$WORK/store" -q > /dev/null
+
+"$CLI" serve "$WORK/store" --port 0 --threads "$THREADS" -q > "$WORK/serve.log" 2>&1 &
+SERVER_PID=$!
+PORT=""
+for _ in $(seq 100); do
+  PORT=$(sed -n 's/^listening on http:\/\/[^:]*:\([0-9]*\)$/\1/p' "$WORK/serve.log" | head -1)
+  [ -n "$PORT" ] && break
+  kill -0 "$SERVER_PID" 2> /dev/null || { cat "$WORK/serve.log" >&2; exit 1; }
+  sleep 0.1
+done
+[ -n "$PORT" ] || { echo "server did not start" >&2; exit 1; }
+BASE="http://127.0.0.1:$PORT"
+curl -sf "$BASE/healthz" > /dev/null
+curl -sf "$BASE/v1/meta" > "$WORK/meta.json"
+echo "== server on $BASE, $THREADS threads, $(nproc) cores (wrk shares them)"
+
+# Lua scripts for wrk: varied points inside the scene's world box, varied tile positions.
+python3 - "$WORK" "$METHOD" << 'EOF'
+import json, sys
+work, method = sys.argv[1], sys.argv[2]
+meta = json.load(open(f"{work}/meta.json"))
+s = meta["shadow"]
+lo, hi = s["world_bounds"]["min"], s["world_bounds"]["max"]
+open(f"{work}/points.lua", "w").write(f"""
+math.randomseed(42)
+local lo = {{{lo[0]!r}, {lo[1]!r}, {lo[2]!r}}}
+local hi = {{{hi[0]!r}, {hi[1]!r}, {hi[2]!r}}}
+request = function()
+  local x = lo[1] + math.random() * (hi[1] - lo[1])
+  local y = lo[2] + math.random() * (hi[2] - lo[2])
+  local z = lo[3] + math.random() * (hi[3] - lo[3])
+  return wrk.format("GET", string.format("/v1/shadow?x=%.9g&y=%.9g&z=%.9g&method={method}", x, y, z))
+end
+""")
+n, z = s["tiles_per_side"], s["tile_level"]
+open(f"{work}/tiles.lua", "w").write(f"""
+math.randomseed(7)
+request = function()
+  return wrk.format("GET", string.format("/v1/tiles/{method}/{z}/%d/%d", math.random(0, {n - 1}), math.random(0, {n - 1})))
+end
+""")
+# 100k points in the box, little-endian float32 x, y, z.
+import random, struct
+random.seed(1)
+with open(f"{work}/batch.bin", "wb") as f:
+    for _ in range(100000):
+        f.write(struct.pack("<3f", *(random.uniform(lo[i], hi[i]) for i in range(3))))
+EOF
+
+run_wrk() {  # name script connections
+  local out
+  out=$(wrk -t2 -c"$3" -d"${DURATION}s" --latency -s "$2" "$BASE")
+  local rps p50 p99 errors
+  rps=$(echo "$out" | awk '/Requests\/sec/ {print $2}')
+  p50=$(echo "$out" | awk '$1 == "50%" {print $2}')
+  p99=$(echo "$out" | awk '$1 == "99%" {print $2}')
+  errors=$(echo "$out" | awk '/Non-2xx|Socket errors/ {print}' | tr '\n' ' ')
+  printf "%-28s %10s req/s   p50 %-9s p99 %-9s %s\n" "$1" "$rps" "$p50" "$p99" "${errors:-no errors}"
+}
+
+for c in $CONNECTIONS; do
+  echo "== wrk -t2 -c$c -d${DURATION}s"
+  run_wrk "GET /v1/shadow (point)" "$WORK/points.lua" "$c"
+  run_wrk "GET /v1/tiles (blob)" "$WORK/tiles.lua" "$c"
+done
+
+echo "== binary batches of 100k points (POST application/octet-stream), 5 runs"
+for run in 1 2 3 4 5; do
+  # "Expect:" off: time the server, not curl's 100-continue round trip.
+  curl -sf -o "$WORK/lit.bin" -w "%{time_total}\n" -H "Expect:" -H "Content-Type: application/octet-stream" \
+    --data-binary "@$WORK/batch.bin" "$BASE/v1/shadow?method=$METHOD" >> "$WORK/batch_times"
+  [ "$(stat -c %s "$WORK/lit.bin")" -eq 400000 ] || { echo "batch answer has the wrong size" >&2; exit 1; }
+done
+python3 - "$WORK/batch_times" << 'EOF'
+import statistics, sys
+times = sorted(float(t) for t in open(sys.argv[1]))
+print(f"{'POST /v1/shadow 100k points':<28} median {statistics.median(times) * 1e3:.1f} ms  best {times[0] * 1e3:.1f} ms"
+      f"   {100000 / statistics.median(times) / 1e6:.2f} M points/s (median)")
+EOF
+curl -sf "$BASE/metrics" | grep -E '^shadowtiles_(points_answered_total|tile_cache_(hits|misses)_total) ' || true

@@ -1,0 +1,429 @@
+#include "client/dagmh_decoder.hpp"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cassert>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "client/dagmh_format.hpp"
+
+namespace shadowtiles {
+namespace {
+
+namespace F = dagmh_format;
+static_assert(std::endian::native == std::endian::little, "DAG-MH payloads are read with memcpy: little-endian only");
+
+// Fixed-size reads per width: a memcpy of runtime length would be a library call on the hot path.
+inline uint32_t load_uint(const uint8_t* p, unsigned width) {
+  switch (width) {
+    case 1: return p[0];
+    case 2: return uint32_t(p[0]) | (uint32_t(p[1]) << 8);
+    case 3: return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16);
+    default: {
+      uint32_t x;
+      std::memcpy(&x, p, 4);
+      return x;
+    }
+  }
+}
+inline float load_f32(const uint8_t* p) {
+  float f;
+  std::memcpy(&f, p, 4);
+  return f;
+}
+inline unsigned child_index(uint32_t u, uint32_t v, unsigned shift) {
+  return ((u >> shift) & 1u) | (((v >> shift) & 1u) << 1);
+}
+// Per mask and child: present children before it (rank in the count list) and children with refs
+// before it, plus the ref count; table reads instead of bit loops on every step.
+struct MaskInfo {
+  uint8_t present_before[4];
+  uint8_t refs_before[4];
+  uint8_t refs;
+};
+constexpr std::array<MaskInfo, 256> make_mask_info() {
+  std::array<MaskInfo, 256> table{};
+  for (unsigned mask = 0; mask < 256; ++mask) {
+    MaskInfo info{};
+    uint8_t present = 0, refs = 0;
+    for (unsigned i = 0; i < 4; ++i) {
+      info.present_before[i] = present;
+      info.refs_before[i] = refs;
+      const unsigned code = F::child_code(uint8_t(mask), i);
+      present += code != 0;
+      refs += code >= F::kCodeTreelet;
+    }
+    info.refs = refs;
+    table[mask] = info;
+  }
+  return table;
+}
+constexpr std::array<MaskInfo, 256> kMaskInfo = make_mask_info();
+// Byte popcounts by table: without -mpopcnt, std::popcount is a library call.
+constexpr std::array<uint8_t, 256> make_popcounts() {
+  std::array<uint8_t, 256> t{};
+  for (unsigned i = 0; i < 256; ++i) t[i] = uint8_t((i & 1) + t[i / 2]);
+  return t;
+}
+constexpr std::array<uint8_t, 256> kPopcount = make_popcounts();
+// Set bits of a byte bitmap below bit `bit`.
+inline unsigned popcount_below(const uint8_t* bytes, unsigned bit) {
+  unsigned n = 0, q = 0;
+  for (; q + 8 <= bit; q += 8) n += kPopcount[bytes[q / 8]];
+  if (bit > q) n += kPopcount[bytes[q / 8] & ((1u << (bit - q)) - 1u)];
+  return n;
+}
+
+Error corrupt(const std::string& what) { return make_error(ErrorCode::corrupt_data, "DAG-MH payload: " + what); }
+
+// Depth of every bit of a treelet layout with H levels (pre-order).
+void bit_depths(unsigned H, unsigned depth, uint32_t index, std::vector<uint8_t>& out) {
+  out[index] = uint8_t(depth);
+  if (depth + 1 >= H) return;
+  for (unsigned c = 0; c < 4; ++c) bit_depths(H, depth + 1, index + 1 + c * F::complete_nodes(H - 1 - depth), out);
+}
+
+}  // namespace
+
+Result<DagMhTileView> DagMhTileView::parse(std::span<const uint8_t> payload, const DagMhParseOptions& options) {
+  const uint8_t* h = payload.data();
+  if (payload.size() < F::kHeaderBytes) return corrupt("shorter than its header");
+  if (std::memcmp(h + F::kOffMagic, F::kMagic, 4) != 0) return corrupt("bad magic");
+  const uint32_t version = load_uint(h + F::kOffVersion, 2);
+  if (version > F::kFormatVersion)
+    return make_error(ErrorCode::unsupported, "DAG-MH payload format version " + std::to_string(version) +
+                                                  " is newer than this decoder");
+  if (version != F::kFormatVersion) return corrupt("bad format version");
+  if (load_uint(h + F::kOffFlags, 2) != 0) return corrupt("unknown flags");
+
+  DagMhTileView view;
+  view.size_ = load_uint(h + F::kOffSize, 4);
+  view.levels_ = h[F::kOffLevels];
+  view.H_ = h[F::kOffTreeletHeight];
+  view.wr_ = h[F::kOffRefWidth];
+  view.wc_ = h[F::kOffCountWidth];
+  view.wo_ = h[F::kOffChunkOffsetWidth];
+  view.root_kind_ = h[F::kOffRootKind];
+  view.chunk_size_ = load_uint(h + F::kOffChunkSize, 2);
+  view.root_ref_ = load_uint(h + F::kOffRootRef, 4);
+  const uint32_t dag_bytes = load_uint(h + F::kOffDagBytes, 4);
+  const uint32_t treelet_count = load_uint(h + F::kOffTreeletCount, 4);
+  view.value_count_ = load_uint(h + F::kOffValueCount, 4);
+  const uint32_t chunk_bytes = load_uint(h + F::kOffChunkBytes, 4);
+  const unsigned L = view.levels_, H = view.H_, wr = view.wr_, wc = view.wc_, wo = view.wo_;
+  const unsigned C = view.chunk_size_;
+  const uint32_t N = view.value_count_;
+
+  if (L > F::kMaxLevels || view.size_ != (uint32_t(1) << L)) return corrupt("bad size or level count");
+  if (H < F::kMinTreeletHeight || H > F::kMaxTreeletHeight) return corrupt("bad treelet height");
+  if (wr < 1 || wr > 4 || wc < 1 || wc > 4 || wo < 1 || wo > 4) return corrupt("bad field width");
+  if (C < 1 || C > F::kMaxChunkSize) return corrupt("bad chunk size");
+  if (N < 1) return corrupt("no values");
+  view.treelet_bytes_ = F::treelet_bytes(H);
+  const uint64_t chunk_count = (uint64_t(N) + C - 1) / C;
+  const uint64_t treelet_section = uint64_t(treelet_count) * view.treelet_bytes_;
+  const uint64_t expected =
+      F::kHeaderBytes + uint64_t(dag_bytes) + treelet_section + chunk_count * wo + uint64_t(chunk_bytes);
+  if (uint64_t(payload.size()) != expected) return corrupt("size does not match its header");
+  view.dag_ = h + F::kHeaderBytes;
+  view.treelets_ = view.dag_ + dag_bytes;
+  view.chunk_table_ = view.treelets_ + treelet_section;
+  view.chunks_ = view.chunk_table_ + chunk_count * wo;
+
+  DagMhStats& st = view.stats_;
+  st.size = view.size_;
+  st.levels = L;
+  st.treelet_height = H;
+  st.chunk_size = C;
+  st.ref_width = wr;
+  st.count_width = wc;
+  st.chunk_offset_width = wo;
+  st.payload_bytes = payload.size();
+  st.header_bytes = F::kHeaderBytes;
+  st.dag_bytes = dag_bytes;
+  st.treelet_bytes = treelet_section;
+  st.treelets = treelet_count;
+  st.chunk_table_bytes = chunk_count * wo;
+  st.values = N;
+  st.chunks = chunk_count;
+
+  // Treelets: value count and height (levels down to the deepest set bit); padding bits zero.
+  const size_t TB = view.treelet_bytes_;
+  const unsigned bits = unsigned(F::treelet_bits(H));
+  std::vector<uint8_t> depth_of(bits, 0);
+  bit_depths(H, 0, 0, depth_of);
+  std::vector<uint32_t> t_values(treelet_count);
+  std::vector<uint8_t> t_height(treelet_count);
+  for (uint32_t t = 0; t < treelet_count; ++t) {
+    const uint8_t* p = view.treelets_ + size_t(t) * TB;
+    if (bits % 8 != 0 && (p[TB - 1] >> (bits % 8)) != 0) return corrupt("treelet padding bits set");
+    unsigned count = 0, height = 1;
+    for (unsigned b = 0; b < bits; ++b)
+      if ((p[b / 8] >> (b % 8)) & 1u) ++count, height = std::max(height, unsigned(depth_of[b]) + 1);
+    t_values[t] = count;
+    t_height[t] = uint8_t(height);
+  }
+
+  // DAG nodes tile their section in order; references point forward to node starts or to treelets.
+  std::vector<uint32_t> starts;
+  for (uint64_t at = 0; at < dag_bytes;) {
+    const uint8_t mask = view.dag_[at];
+    if (at + 2 > dag_bytes) return corrupt("DAG node runs past its section");
+    if (mask == 0) return corrupt("DAG node without children");
+    if (view.dag_[at + 1] > 1) return corrupt("unknown DAG node flags");
+    const size_t nb = F::node_bytes(mask, wr, wc);
+    if (at + nb > dag_bytes) return corrupt("DAG node runs past its section");
+    starts.push_back(uint32_t(at));
+    at += nb;
+  }
+  st.dag_nodes = starts.size();
+  std::vector<uint64_t> n_values(starts.size());
+  std::vector<uint8_t> n_height(starts.size());
+  for (size_t k = starts.size(); k-- > 0;) {
+    const uint8_t* node = view.dag_ + starts[k];
+    const uint8_t mask = node[0];
+    const unsigned valued = node[1] & 1u;
+    const uint8_t* refs = node + 2;
+    const uint8_t* counts = refs + F::ref_children(mask) * wr;
+    uint64_t sum = 0;
+    unsigned height = 1, r = 0, present = 0;
+    for (unsigned i = 0; i < 4; ++i) {
+      const unsigned code = F::child_code(mask, i);
+      if (code == 0) continue;
+      if (present > 0 && load_uint(counts + (present - 1) * wc, wc) != sum)
+        return corrupt("stored value count does not match the subtree");
+      ++present;
+      uint64_t child_values = 1;
+      unsigned child_height = 1;
+      if (code == F::kCodeTreelet) {
+        const uint32_t t = load_uint(refs + wr * r++, wr);
+        if (t >= treelet_count) return corrupt("treelet reference out of range");
+        child_values = t_values[t];
+        child_height = t_height[t];
+      } else if (code == F::kCodeDag) {
+        const uint32_t target = load_uint(refs + wr * r++, wr);
+        auto it = std::lower_bound(starts.begin() + k + 1, starts.end(), target);
+        if (target <= starts[k] || it == starts.end() || *it != target)
+          return corrupt("DAG reference not forward to a node");
+        child_values = n_values[it - starts.begin()];
+        child_height = n_height[it - starts.begin()];
+      }
+      sum += child_values;
+      height = std::max(height, child_height + 1);
+    }
+    n_values[k] = sum + valued;
+    if (n_values[k] > N) return corrupt("subtree holds more values than the tile");
+    if (height > L + 1) return corrupt("tree deeper than the tile's level count");
+    n_height[k] = uint8_t(height);
+  }
+
+  // Root.
+  uint64_t root_values = 0;
+  unsigned root_height = 1;
+  switch (view.root_kind_) {
+    case F::kCodeLeaf:
+      if (view.root_ref_ != 0 || dag_bytes != 0) return corrupt("leaf root with a DAG");
+      root_values = 1;
+      break;
+    case F::kCodeTreelet:
+      if (dag_bytes != 0 || view.root_ref_ >= treelet_count) return corrupt("bad treelet root");
+      if ((view.treelets_[size_t(view.root_ref_) * TB] & 1u) == 0) return corrupt("root without a value");
+      root_values = t_values[view.root_ref_];
+      root_height = t_height[view.root_ref_];
+      break;
+    case F::kCodeDag:
+      if (dag_bytes == 0 || view.root_ref_ != 0) return corrupt("bad DAG root");
+      if ((view.dag_[1] & 1u) == 0) return corrupt("root without a value");
+      root_values = n_values[0];
+      root_height = n_height[0];
+      break;
+    default: return corrupt("bad root kind");
+  }
+  if (root_values != N) return corrupt("value count does not match the tree");
+  if (root_height > L + 1) return corrupt("tree deeper than the tile's level count");
+
+  // Chunks: offsets increasing from 0, each chunk exactly its computed size, all values finite.
+  for (uint64_t c = 0; c < chunk_count; ++c) {
+    const uint64_t begin = load_uint(view.chunk_table_ + c * wo, wo);
+    const uint64_t end = c + 1 < chunk_count ? load_uint(view.chunk_table_ + (c + 1) * wo, wo) : chunk_bytes;
+    if ((c == 0 && begin != 0) || end < begin || end > chunk_bytes) return corrupt("bad chunk offsets");
+    const uint64_t size = end - begin;
+    const uint8_t* p = view.chunks_ + begin;
+    const unsigned n = unsigned(std::min<uint64_t>(C, N - c * C));
+    if (size < 5) return corrupt("chunk too short");
+    if (!std::isfinite(load_f32(p))) return corrupt("non-finite representative");
+    const unsigned b = p[4];
+    if (b == 0) {
+      if (size != 5) return corrupt("bad chunk size");
+      st.chunk_header_bytes += 5;
+      st.representative_values += n;
+      continue;
+    }
+    const size_t bm = F::bitmap_bytes(n);
+    if (size < 5 + bm) return corrupt("chunk too short");
+    if (n % 8 != 0 && (p[5 + bm - 1] >> (n % 8)) != 0) return corrupt("chunk bitmap padding set");
+    const unsigned k = popcount_below(p + 5, unsigned(bm * 8));
+    st.representative_values += n - k;
+    if (b == F::kRawBits) {
+      if (size != 5 + bm + 4 * uint64_t(k)) return corrupt("bad chunk size");
+      for (unsigned i = 0; i < k; ++i)
+        if (!std::isfinite(load_f32(p + 5 + bm + 4 * i))) return corrupt("non-finite value");
+      st.chunk_header_bytes += 5 + bm;
+      st.raw_value_bytes += 4 * uint64_t(k);
+      st.raw_values += k;
+    } else if (b <= F::kMaxQuantBits) {
+      const uint64_t data = (uint64_t(k) * b + 7) / 8;
+      if (size != 5 + bm + 8 + data) return corrupt("bad chunk size");
+      const float cl = load_f32(p + 5 + bm), cf = load_f32(p + 5 + bm + 4);
+      // Monotone in m: both ends finite means every multiplier decodes to a finite value.
+      if (!std::isfinite(cl) || !std::isfinite(cf) || !std::isfinite(F::dequantize(cl, cf, 0)) ||
+          !std::isfinite(F::dequantize(cl, cf, (uint32_t(1) << b) - 1)))
+        return corrupt("non-finite quantisation grid");
+      st.chunk_header_bytes += 5 + bm + 8;
+      st.multiplier_bytes += data;
+      st.quantized_values += k;
+    } else {
+      return corrupt("bad multiplier width");
+    }
+  }
+
+  // Skip list, derived.
+  const unsigned S = std::min({options.skip_level, L, 10u});
+  if (S > 0) {
+    const uint32_t side = uint32_t(1) << S;
+    view.skip_level_ = S;
+    view.skip_.resize(size_t(side) * side);
+    for (uint32_t y = 0; y < side; ++y)
+      for (uint32_t x = 0; x < side; ++x) {
+        State s = view.root_state();
+        const uint32_t u = x << (L - S), v = y << (L - S);
+        while (s.kind == kDag && s.level < S) view.step(s, u, v);
+        view.skip_[size_t(y) * side + x] = s;
+      }
+  }
+  return view;
+}
+
+DagMhTileView::State DagMhTileView::root_state() const {
+  if (root_kind_ == F::kCodeDag) return State{root_ref_, 0, 0, kDag, 0};
+  if (root_kind_ == F::kCodeTreelet) return State{root_ref_, 0, 0, kTreelet, 0};
+  return State{0, 0, 0, kDone, 0};
+}
+
+DagMhTileView::State DagMhTileView::start_state(uint32_t u, uint32_t v, unsigned stop) const {
+  if (skip_level_ != 0 && stop >= skip_level_) {
+    const unsigned shift = levels_ - skip_level_;
+    return skip_[(size_t(v >> shift) << skip_level_) | (u >> shift)];
+  }
+  return root_state();
+}
+
+void DagMhTileView::step(State& s, uint32_t u, uint32_t v) const {
+  const uint8_t* node = dag_ + s.ref;
+  const uint8_t mask = node[0];
+  const unsigned i = child_index(u, v, levels_ - 1 - s.level);
+  const unsigned code = F::child_code(mask, i);
+  if (code == F::kCodeAbsent) {
+    s.kind = kDone;
+    return;
+  }
+  const MaskInfo& info = kMaskInfo[mask];
+  const unsigned rank = info.present_before[i];
+  const uint8_t* counts = node + 2 + info.refs * wr_;
+  const uint32_t base = s.count + (node[1] & 1u) + (rank ? load_uint(counts + (rank - 1) * wc_, wc_) : 0);
+  if (code == F::kCodeLeaf) {
+    s.kind = kDone;
+    s.last = base;
+    return;
+  }
+  s.ref = load_uint(node + 2 + info.refs_before[i] * wr_, wr_);
+  s.count = base;
+  s.level = uint8_t(s.level + 1);
+  if (code == F::kCodeTreelet) {
+    s.kind = kTreelet;
+  } else {
+    s.kind = kDag;
+    if (dag_[s.ref + 1] & 1u) s.last = base;
+  }
+}
+
+uint32_t DagMhTileView::treelet_find(const State& s, uint32_t u, uint32_t v, unsigned stop) const {
+  const uint8_t* t = treelets_ + size_t(s.ref) * treelet_bytes_;
+  const unsigned d = std::min(H_ - 1, stop - s.level);
+  uint32_t idx[F::kMaxTreeletHeight];
+  idx[0] = 0;
+  for (unsigned n = 0; n < d; ++n)
+    idx[n + 1] = idx[n] + 1 + child_index(u, v, levels_ - 1 - (s.level + n)) * F::complete_nodes(H_ - 1 - n);
+  // Finest level first: the deepest valued node on the path wins.
+  for (unsigned n = d + 1; n-- > 0;)
+    if ((t[idx[n] / 8] >> (idx[n] % 8)) & 1u) return s.count + popcount_below(t, idx[n]);
+  return s.last;
+}
+
+uint32_t DagMhTileView::resolve(State s, uint32_t u, uint32_t v, unsigned stop) const {
+  while (s.kind == kDag && s.level < stop) step(s, u, v);
+  if (s.kind == kTreelet) return treelet_find(s, u, v, stop);
+  return s.last;
+}
+
+float DagMhTileView::value_at(uint32_t index) const {
+  if (chunks_ == nullptr) return 1.0f;  // default-constructed view
+  if (index >= value_count_) index = value_count_ - 1;
+  const uint32_t c = index / chunk_size_, j = index % chunk_size_;
+  const uint8_t* p = chunks_ + load_uint(chunk_table_ + size_t(c) * wo_, wo_);
+  const float rep = load_f32(p);
+  const unsigned b = p[4];
+  if (b == 0 || ((p[5 + j / 8] >> (j % 8)) & 1u) == 0) return rep;
+  const unsigned n = std::min(chunk_size_, value_count_ - c * chunk_size_);
+  const size_t bm = F::bitmap_bytes(n);
+  const unsigned rank = popcount_below(p + 5, j);
+  if (b == F::kRawBits) return load_f32(p + 5 + bm + 4 * size_t(rank));
+  const float cl = load_f32(p + 5 + bm), cf = load_f32(p + 5 + bm + 4);
+  const uint8_t* data = p + 5 + bm + 8;
+  const uint64_t bit = uint64_t(rank) * b;
+  // Only the bytes holding the multiplier: never past the chunk.
+  const unsigned nbytes = unsigned((bit % 8 + b + 7) / 8);
+  uint64_t acc = 0;
+  for (unsigned q = 0; q < nbytes; ++q) acc |= uint64_t(data[bit / 8 + q]) << (8 * q);
+  const uint32_t m = uint32_t((acc >> (bit % 8)) & ((uint64_t(1) << b) - 1));
+  return F::dequantize(cl, cf, m);
+}
+
+float DagMhTileView::lookup(uint32_t u, uint32_t v, unsigned max_level) const {
+  assert(u < size_ && v < size_);
+  if (size_ == 0) return 1.0f;
+  u &= size_ - 1;
+  v &= size_ - 1;
+  const unsigned stop = std::min(max_level, levels_);
+  return value_at(resolve(start_state(u, v, stop), u, v, stop));
+}
+
+uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth,
+                                      float bias) const {
+  assert(kw >= 1 && kh >= 1 && u0 < size_ && v0 < size_ && kw <= size_ - u0 && kh <= size_ - v0);
+  if (size_ == 0 || u0 >= size_ || v0 >= size_) return 0;
+  kw = std::min(kw, size_ - u0);
+  kh = std::min(kh, size_ - v0);
+  if (kw == 0 || kh == 0) return 0;
+  const uint32_t u1 = u0 + kw - 1, v1 = v0 + kh - 1;
+  const unsigned L = levels_;
+  const unsigned lca = L - unsigned(std::bit_width((u0 ^ u1) | (v0 ^ v1)));
+  State s = start_state(u0, v0, lca);
+  while (s.kind == kDag && s.level < lca) step(s, u0, v0);
+  // The walk ended at or above the common ancestor: one value decides the whole box.
+  if (s.kind == kDone) return depth <= value_at(s.last) + bias ? kw * kh : 0;
+  uint32_t lit = 0, cached_index = UINT32_MAX;
+  float cached_value = 0;
+  for (uint32_t v = v0; v <= v1; ++v)
+    for (uint32_t u = u0; u <= u1; ++u) {
+      const uint32_t index = resolve(s, u, v, L);
+      if (index != cached_index) cached_index = index, cached_value = value_at(index);
+      lit += depth <= cached_value + bias;
+    }
+  return lit;
+}
+
+}  // namespace shadowtiles

@@ -1,0 +1,102 @@
+// Decoder of DAG-MH tile payloads (format: client/dagmh_format.hpp, docs/dagmh.md): point lookups at
+// full or coarser resolution, PCF over a box inside the tile, size statistics for `inspect`.
+//
+// Traversal (DESIGN.md §7): two value indices, `count` (values before the current node in depth-first
+// order) and `last` (the deepest value seen on the path); a missing child returns `last`. Treelets are
+// checked finest level first; the value index is `count` plus the set bits before the found node.
+//
+// Untrusted input: parse() validates the whole payload up front (header fields, exact section sizes,
+// DAG nodes tiling their section with forward-only references, treelet references in range, every
+// stored value count equal to the recomputed one, subtree heights within the level count, the root
+// valued, every chunk's layout, size and finiteness). A payload that passes cannot make a lookup read
+// out of bounds, loop or return a non-finite value; anything else is corrupt_data (unsupported for a
+// newer format version). Validation is linear in the payload size.
+//
+// Lifetime: the view does not own the payload bytes; they must outlive it and stay unchanged.
+// Thread safety: a parsed view is immutable; lookups may run concurrently. Little-endian hosts only.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "store/result.hpp"
+
+namespace shadowtiles {
+
+inline constexpr unsigned kDagMhAllLevels = std::numeric_limits<unsigned>::max();
+
+struct DagMhParseOptions {
+  unsigned skip_level = 6;  // level of the in-memory skip list (clamped to the levels; 0 = none)
+};
+
+// Size breakdown (the paper's Tables 3 and 4) and counts.
+struct DagMhStats {
+  uint32_t size = 0;
+  unsigned levels = 0, treelet_height = 0, chunk_size = 0;
+  unsigned ref_width = 0, count_width = 0, chunk_offset_width = 0;
+  uint64_t payload_bytes = 0;
+  uint64_t header_bytes = 0;
+  uint64_t dag_bytes = 0, dag_nodes = 0;
+  uint64_t treelet_bytes = 0, treelets = 0;
+  uint64_t chunk_table_bytes = 0;   // chunk offsets
+  uint64_t chunk_header_bytes = 0;  // representative, b, bitmap, c_l, c_f
+  uint64_t multiplier_bytes = 0, raw_value_bytes = 0;
+  uint64_t values = 0, chunks = 0;
+  uint64_t representative_values = 0, quantized_values = 0, raw_values = 0;
+};
+
+class DagMhTileView {
+ public:
+  DagMhTileView() = default;
+
+  static Result<DagMhTileView> parse(std::span<const uint8_t> payload, const DagMhParseOptions& options = {});
+
+  uint32_t size() const { return size_; }
+  unsigned levels() const { return levels_; }
+  const DagMhStats& stats() const { return stats_; }
+
+  // Value of texel (u, v) walking at most down to `max_level` (0 = root; levels() or more = full
+  // resolution). Preconditions: u, v < size() (asserted; masked in release builds).
+  float lookup(uint32_t u, uint32_t v, unsigned max_level = kDagMhAllLevels) const;
+
+  // Lit samples (depth <= value + bias) of the kw x kh box at (u0, v0), full resolution: one descent
+  // to the box's lowest common ancestor, then per sample from there. Equals per-sample lookup().
+  // Preconditions: box inside the tile (asserted; clamped in release).
+  uint32_t pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth, float bias) const;
+
+  // Value number `index` of the depth-first list (< stats().values; masked otherwise).
+  float value_at(uint32_t index) const;
+
+ private:
+  enum : uint8_t { kDone = 0, kTreelet = 2, kDag = 3 };
+  struct State {
+    uint32_t ref;    // DAG node offset or treelet index
+    uint32_t count;  // index of the first value of the node's subtree
+    uint32_t last;   // deepest value index on the path so far
+    uint8_t kind;
+    uint8_t level;   // level of the DAG node / treelet root
+  };
+  State root_state() const;
+  State start_state(uint32_t u, uint32_t v, unsigned stop) const;
+  void step(State& s, uint32_t u, uint32_t v) const;  // DAG node -> child
+  uint32_t resolve(State s, uint32_t u, uint32_t v, unsigned stop) const;
+  uint32_t treelet_find(const State& s, uint32_t u, uint32_t v, unsigned stop) const;
+
+  const uint8_t* dag_ = nullptr;
+  const uint8_t* treelets_ = nullptr;
+  const uint8_t* chunk_table_ = nullptr;
+  const uint8_t* chunks_ = nullptr;
+  uint32_t size_ = 0;
+  unsigned levels_ = 0, H_ = 0, wr_ = 0, wc_ = 0, wo_ = 0, chunk_size_ = 1;
+  size_t treelet_bytes_ = 0;
+  uint8_t root_kind_ = 0;
+  uint32_t root_ref_ = 0;
+  uint32_t value_count_ = 0;
+  unsigned skip_level_ = 0;
+  std::vector<State> skip_;
+  DagMhStats stats_;
+};
+
+}  // namespace shadowtiles

@@ -1,0 +1,35 @@
+// Small helpers every route uses to answer: JSON bodies, JSON errors {"error": ..., "code": ...},
+// and the mapping from library errors (store/result.hpp) to HTTP statuses (DESIGN.md §13: the server
+// maps error codes to HTTP statuses). Client mistakes are 4xx; only failures of the store itself
+// (a corrupt blob, an I/O error) are 5xx.
+// Thread safety: stateless functions. The messages placed in responses never echo unbounded client
+// input (request_parsing.cpp bounds what it quotes).
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include "store/result.hpp"
+
+namespace shadowtiles::server {
+
+struct HttpError {
+  int status = 400;
+  std::string code;     // machine-readable, e.g. "invalid_input", "payload_too_large"
+  std::string message;  // for humans
+};
+
+// invalid_input, unsupported → 400; not_found → 404; corrupt_data, io_error, out_of_space → 500.
+HttpError http_error_for(const Error& error);
+
+void send_json(httplib::Response& res, int status, const nlohmann::json& body);
+void send_error(httplib::Response& res, const HttpError& error);
+void send_error(httplib::Response& res, int status, std::string_view code, std::string_view message);
+
+// The media type of a Content-Type header, lowercased, without parameters ("; charset=...").
+std::string media_type(std::string_view content_type);
+
+}  // namespace shadowtiles::server

@@ -1,0 +1,109 @@
+#include "server/metrics.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace shadowtiles::server {
+
+Metrics::Route Metrics::route_of(std::string_view path) {
+  if (path == "/v1/meta") return Route::meta;
+  if (path == "/v1/shadow") return Route::shadow;
+  if (path.starts_with("/v1/tiles/")) return Route::tiles;
+  if (path == "/v1/skiplist") return Route::skiplist;
+  if (path == "/healthz") return Route::healthz;
+  if (path == "/metrics") return Route::metrics;
+  return Route::other;
+}
+
+const char* Metrics::route_name(Route route) {
+  switch (route) {
+    case Route::meta: return "/v1/meta";
+    case Route::shadow: return "/v1/shadow";
+    case Route::tiles: return "/v1/tiles";
+    case Route::skiplist: return "/v1/skiplist";
+    case Route::healthz: return "/healthz";
+    case Route::metrics: return "/metrics";
+    case Route::other: break;
+  }
+  return "other";
+}
+
+void Metrics::observe(Route route, std::string_view http_method, int status, std::optional<double> seconds) {
+  static constexpr std::string_view kMethods[] = {"GET", "HEAD", "POST", "OPTIONS"};
+  std::string method = std::find(std::begin(kMethods), std::end(kMethods), http_method) != std::end(kMethods)
+                           ? std::string(http_method)
+                           : "other";
+  if (status < 100 || status > 599) status = 0;
+  std::lock_guard lock(mutex_);
+  ++requests_[{route, std::move(method), status}];
+  if (seconds) {
+    Histogram& h = latency_[size_t(route)];
+    size_t bucket = std::lower_bound(kLatencyBuckets.begin(), kLatencyBuckets.end(), *seconds) - kLatencyBuckets.begin();
+    ++h.buckets[bucket];
+    h.sum += *seconds;
+    ++h.count;
+  }
+}
+
+std::string Metrics::render(const std::optional<CacheStats>& cache) const {
+  std::string out;
+  char line[1024];
+  auto emit = [&](const char* format, auto... args) {
+    std::snprintf(line, sizeof line, format, args...);
+    out += line;
+  };
+  std::lock_guard lock(mutex_);
+  out += "# HELP shadowtiles_http_requests_total HTTP requests answered, by route, method and status.\n"
+         "# TYPE shadowtiles_http_requests_total counter\n";
+  for (const auto& [key, count] : requests_) {
+    const auto& [route, method, status] = key;
+    emit("shadowtiles_http_requests_total{route=\"%s\",method=\"%s\",status=\"%d\"} %llu\n", route_name(route),
+         method.c_str(), status, (unsigned long long)count);
+  }
+  out += "# HELP shadowtiles_http_request_duration_seconds Time from the request headers to the response.\n"
+         "# TYPE shadowtiles_http_request_duration_seconds histogram\n";
+  for (size_t r = 0; r < kRouteCount; ++r) {
+    const Histogram& h = latency_[r];
+    if (h.count == 0) continue;
+    const char* route = route_name(Route(r));
+    uint64_t cumulative = 0;
+    for (size_t b = 0; b < kLatencyBuckets.size(); ++b) {
+      cumulative += h.buckets[b];
+      emit("shadowtiles_http_request_duration_seconds_bucket{route=\"%s\",le=\"%g\"} %llu\n", route,
+           kLatencyBuckets[b], (unsigned long long)cumulative);
+    }
+    emit("shadowtiles_http_request_duration_seconds_bucket{route=\"%s\",le=\"+Inf\"} %llu\n", route,
+         (unsigned long long)h.count);
+    emit("shadowtiles_http_request_duration_seconds_sum{route=\"%s\"} %.9g\n", route, h.sum);
+    emit("shadowtiles_http_request_duration_seconds_count{route=\"%s\"} %llu\n", route, (unsigned long long)h.count);
+  }
+  emit("# HELP shadowtiles_points_answered_total Points answered by /v1/shadow (single and batch).\n"
+       "# TYPE shadowtiles_points_answered_total counter\n"
+       "shadowtiles_points_answered_total %llu\n",
+       (unsigned long long)points_.load(std::memory_order_relaxed));
+  emit("# HELP shadowtiles_corrupt_blobs_total Stored blobs that failed their checks and were not served.\n"
+       "# TYPE shadowtiles_corrupt_blobs_total counter\n"
+       "shadowtiles_corrupt_blobs_total %llu\n",
+       (unsigned long long)corrupt_blobs_.load(std::memory_order_relaxed));
+  if (cache) {
+    emit("# HELP shadowtiles_tile_cache_hits_total Decoded tile cache hits.\n"
+         "# TYPE shadowtiles_tile_cache_hits_total counter\n"
+         "shadowtiles_tile_cache_hits_total %llu\n",
+         (unsigned long long)cache->hits);
+    emit("# HELP shadowtiles_tile_cache_misses_total Decoded tile cache misses (tile read and decoded).\n"
+         "# TYPE shadowtiles_tile_cache_misses_total counter\n"
+         "shadowtiles_tile_cache_misses_total %llu\n",
+         (unsigned long long)cache->misses);
+    emit("# HELP shadowtiles_tile_cache_bytes Bytes held by decoded tiles in the cache.\n"
+         "# TYPE shadowtiles_tile_cache_bytes gauge\n"
+         "shadowtiles_tile_cache_bytes %llu\n",
+         (unsigned long long)cache->bytes);
+    emit("# HELP shadowtiles_tile_cache_tiles Tiles in the cache (empty tiles included).\n"
+         "# TYPE shadowtiles_tile_cache_tiles gauge\n"
+         "shadowtiles_tile_cache_tiles %llu\n",
+         (unsigned long long)cache->tiles);
+  }
+  return out;
+}
+
+}  // namespace shadowtiles::server

@@ -1,0 +1,129 @@
+#include "server/routes_blobs.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include "server/http_response.hpp"
+#include "server/request_parsing.hpp"
+#include "store/blob.hpp"
+#include "store/tile_key.hpp"
+
+namespace shadowtiles::server {
+namespace {
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+  return s;
+}
+
+std::string cache_control(const ServiceState& state) {
+  return "public, max-age=" + std::to_string(state.config.cache_control_max_age) + ", immutable";
+}
+
+// Sends the blob under `key` of `db`, or calls on_absent. `what` names it in errors and logs.
+template <class OnAbsent>
+void serve_blob(ServiceState& state, const httplib::Request& req, httplib::Response& res, store::Database db,
+                std::span<const uint8_t> key, std::optional<store::Method> expected_method, const std::string& what,
+                OnAbsent on_absent) {
+  const store::Store& store = state.map()->store();
+  auto snapshot = store.snapshot();
+  if (!snapshot) {
+    spdlog::error("{}: cannot read the store: {}", what, snapshot.error().message);
+    return send_error(res, http_error_for(snapshot.error()));
+  }
+  auto view = snapshot->get_view(db, key);
+  if (!view) {
+    spdlog::error("{}: cannot read the store: {}", what, view.error().message);
+    return send_error(res, http_error_for(view.error()));
+  }
+  if (!view->has_value()) return on_absent();
+  auto header = store::check_blob(**view);
+  if (header && expected_method && header->method != *expected_method)
+    header = make_error(ErrorCode::corrupt_data, "the blob holds another method than its key");
+  if (!header) {
+    state.metrics.add_corrupt_blob();
+    spdlog::error("{}: stored blob fails its checks, not served: {}", what, header.error().message);
+    return send_error(res, 500, "corrupt_data", what + ": the stored blob fails its checks");
+  }
+  const std::string etag = "\"" + store::checksum_hex(header->checksum) + "\"";
+  res.set_header("ETag", etag);
+  res.set_header("Cache-Control", cache_control(state));
+  if (req.has_header("If-None-Match") && if_none_match_matches(req.get_header_value("If-None-Match"), etag)) {
+    res.status = 304;
+    return;
+  }
+  res.status = 200;
+  res.set_content(reinterpret_cast<const char*>((*view)->data()), (*view)->size(), "application/octet-stream");
+}
+
+void get_tile(ServiceState& state, const httplib::Request& req, httplib::Response& res) {
+  if (!state.map()) return send_error(res, 503, "not_ready", "the store is not open yet");
+  const ShadowMap& map = *state.map();
+  auto method = store::parse_method(req.matches[1].str());
+  if (!method) return send_error(res, 400, "invalid_input", "unknown method in the tile URL");
+  uint64_t coords[3];
+  static constexpr const char* kNames[3] = {"level", "x", "y"};
+  for (int i = 0; i < 3; ++i) {
+    auto value = parse_unsigned(req.matches[i + 2].str(), kNames[i], UINT32_MAX);
+    if (!value) return send_error(res, 400, "invalid_input", "tile URL: " + value.error().message);
+    coords[i] = *value;
+  }
+  if (!map.meta().has_method(*method))
+    return send_error(res, 404, "not_found", std::string("method '") + store::method_name(*method) + "' is not in this store");
+  const TileLayout& layout = map.layout();
+  if (coords[0] != layout.tile_level())
+    return send_error(res, 404, "not_found",
+                      "this store has tiles at level " + std::to_string(layout.tile_level()) + " only");
+  TileCoord coord{uint32_t(coords[1]), uint32_t(coords[2])};
+  if (!layout.contains(coord))
+    return send_error(res, 404, "not_found",
+                      "tile outside the map (" + std::to_string(layout.tiles_per_side()) + " tiles per side)");
+  auto key = store::encode_tile_key({*method, layout.tile_level(), coord.x, coord.y});
+  std::string what = std::string("tile ") + store::method_name(*method) + "/" + std::to_string(coords[0]) + "/" +
+                     std::to_string(coord.x) + "/" + std::to_string(coord.y);
+  serve_blob(state, req, res, store::Database::tiles, key, *method, what, [&] {
+    // In bounds, nothing stored: an empty tile (no geometry), lit everywhere.
+    res.status = 204;
+    res.set_header("Cache-Control", cache_control(state));
+  });
+}
+
+void get_skiplist(ServiceState& state, const httplib::Request& req, httplib::Response& res) {
+  if (!state.map()) return send_error(res, 503, "not_ready", "the store is not open yet");
+  const ShadowMap& map = *state.map();
+  auto options = options_from_params(req.params, 1);
+  if (!options) return send_error(res, http_error_for(options.error()));
+  if (options->pcf || options->level || options->bias)
+    return send_error(res, 400, "invalid_input", "/v1/skiplist takes only the 'method' parameter");
+  store::Method method = options->method.value_or(map.default_method());
+  if (!map.meta().has_method(method))
+    return send_error(res, 404, "not_found", std::string("method '") + store::method_name(method) + "' is not in this store");
+  std::string key = std::string("skiplist/") + store::method_name(method);
+  serve_blob(state, req, res, store::Database::top, store::as_bytes(key), std::nullopt,
+             std::string("skip list ") + store::method_name(method), [&] {
+               send_error(res, 404, "not_found",
+                          std::string("no skip list stored for method '") + store::method_name(method) + "'");
+             });
+}
+
+}  // namespace
+
+bool if_none_match_matches(std::string_view header, std::string_view etag) {
+  while (!header.empty()) {
+    size_t comma = header.find(',');
+    std::string_view tag = trim(header.substr(0, comma));
+    header = comma == std::string_view::npos ? std::string_view{} : header.substr(comma + 1);
+    if (tag == "*") return true;
+    if (tag.starts_with("W/")) tag.remove_prefix(2);
+    if (tag == etag) return true;
+  }
+  return false;
+}
+
+void register_blob_routes(httplib::Server& http, ServiceState& state) {
+  http.Get(R"(/v1/tiles/([^/]+)/([^/]+)/([^/]+)/([^/]+))",
+           [&state](const httplib::Request& req, httplib::Response& res) { get_tile(state, req, res); });
+  http.Get("/v1/skiplist", [&state](const httplib::Request& req, httplib::Response& res) { get_skiplist(state, req, res); });
+}
+
+}  // namespace shadowtiles::server

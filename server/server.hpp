@@ -1,0 +1,58 @@
+// Server: the shadowtiles HTTP service (DESIGN.md §10, API in config/README.md) on cpp-httplib.
+//
+// Lifecycle: bind() validates the config and binds the listening socket (port 0 → an ephemeral
+// port, see port()); attach_store() opens the store read-only through ShadowMap (tile cache sized by
+// cache_bytes) and from then on /healthz is 200 and the API answers (before: 503); run() serves on
+// `threads` workers until stop(), then finishes every accepted connection (in-flight requests
+// drain) and returns. The store can be attached while run() is already serving.
+//
+// Errors: bind → invalid_input (bad config), io_error (address cannot be bound); attach_store →
+// ShadowMap::open's errors; run → io_error if the listener fails.
+// Thread safety: stop() and port() may be called from any thread at any time (not from a signal
+// handler: use a thread that waits for signals, see shutdown_signals.hpp). attach_store() once, from
+// one thread. Handlers run concurrently on the worker threads and share only thread-safe state.
+// Untrusted input: every request is parsed strictly; a client can cause 4xx answers but never a
+// crash, a hang beyond the configured timeouts or a 5xx (only a store failing its checks gives 5xx).
+#pragma once
+
+#include <filesystem>
+#include <memory>
+
+#include "server/server_config.hpp"
+#include "store/result.hpp"
+
+namespace shadowtiles {
+class ShadowMap;
+}
+
+namespace shadowtiles::server {
+
+class Server {
+ public:
+  static Result<std::unique_ptr<Server>> bind(const ServerConfig& config);
+  // Precondition: run() is not running (call stop() and wait for it to return first).
+  ~Server();
+  Server(const Server&) = delete;
+  Server& operator=(const Server&) = delete;
+
+  int port() const;
+  const ServerConfig& config() const;
+
+  // Errors: ShadowMap::open's; invalid_input when a store is already attached.
+  Status attach_store(const std::filesystem::path& store_dir);
+  Status attach(std::unique_ptr<ShadowMap> map);
+
+  // Blocks until stop(); returns at once if stop() was already called.
+  Status run();
+  // Stops accepting; run() returns once accepted connections are done. Idempotent. A stop() racing
+  // with the very start of run() can be missed by httplib: callers that stop on a signal should
+  // repeat stop() until run() returns (ShutdownSignals does).
+  void stop();
+
+ private:
+  struct Impl;
+  explicit Server(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace shadowtiles::server

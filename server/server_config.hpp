@@ -1,0 +1,48 @@
+// ServerConfig: everything `shadowtiles serve` can be told (DESIGN.md §10), read from a JSON file
+// (config/serve.json, documented in config/README.md) and overridden by CLI flags.
+//
+// Parsing is strict so a typo never silently falls back to a default: an unknown key, a value of the
+// wrong type or out of its range is an invalid_input error naming the key. Keys absent from the file
+// keep their defaults (below). validate() re-checks a config after CLI overrides.
+// Errors: invalid_input (bad JSON, unknown key, bad value); not_found / io_error (config file).
+// Thread safety: plain value type. Safe on untrusted input (the file is parsed without exceptions
+// escaping and every number is range-checked).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "store/result.hpp"
+
+namespace shadowtiles::server {
+
+struct ServerConfig {
+  std::string host = "127.0.0.1";  // loopback unless told otherwise
+  int port = 8080;                 // 0: an ephemeral port (Server::port() tells which)
+  unsigned threads = 2;            // HTTP workers, also the batch split width
+  uint64_t cache_bytes = uint64_t(256) << 20;  // decoded tile cache budget
+  uint64_t max_body_bytes = uint64_t(16) << 20;  // larger request bodies → 413
+  uint64_t max_batch_points = 1'000'000;         // more points in one batch → 413
+  unsigned max_pcf = 15;                         // largest PCF kernel side accepted (odd)
+  uint64_t cache_control_max_age = 86400;        // seconds, for stored blobs
+  std::vector<std::string> cors_origins;         // exact origins allowed; empty = CORS off
+  unsigned read_timeout_s = 5;
+  unsigned write_timeout_s = 5;
+  unsigned max_connections = 64;         // connections served or waiting; beyond: 503 and close
+  unsigned keep_alive_max_count = 100;   // requests per keep-alive connection
+  unsigned keep_alive_timeout_s = 5;     // idle keep-alive connection closed after this
+
+  // Range checks shared by the file parser and CLI overrides.
+  Status validate() const;
+  nlohmann::json to_json() const;
+  // Keys of `json` override `base`; unknown keys and bad values fail.
+  static Result<ServerConfig> from_json(const nlohmann::json& json, ServerConfig base);
+  static Result<ServerConfig> from_json(const nlohmann::json& json);
+  static Result<ServerConfig> load(const std::filesystem::path& file);
+};
+
+}  // namespace shadowtiles::server

@@ -1,0 +1,832 @@
+// End to end over HTTP: a real store (bunny, 512^2 in 128^2 tiles, raw + mh + mmh) served by the
+// real server on an ephemeral loopback port, queried with httplib::Client. Answers are compared
+// with a ShadowMap opened on a copy of the store (one process must not open one LMDB directory
+// twice). Covers every endpoint, ETag/304, 204/404/400, HEAD, CORS, every bad input, a corrupt blob,
+// 8 concurrent clients, metrics, and the CLI's config handling and SIGTERM drain.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <thread>
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include "builder/build_job.hpp"
+#include "builder/receiver_sampler.hpp"
+#include "builder/scene_loader.hpp"
+#include "client/shadow_map.hpp"
+#include "server/routes_blobs.hpp"
+#include "server/server.hpp"
+#include "store/blob.hpp"
+#include "store/lmdb_store.hpp"
+#include "store/tile_key.hpp"
+#include "tests/testing_support.hpp"
+
+namespace shadowtiles {
+namespace {
+
+using nlohmann::json;
+using testing::TempDir;
+
+constexpr const char* kAllowedOrigin = "https://allowed.example";
+constexpr const char* kBunny = "bunny/stanford-bunny.obj";
+
+BuildConfig bunny_config(const std::filesystem::path& out, std::vector<store::Method> methods) {
+  BuildConfig config;
+  config.scene_path = testing::shared_scene(kBunny);
+  config.store_path = out;
+  config.resolution = 512;
+  config.tile_size = 128;
+  config.load.up = UpAxis::y;
+  config.light_direction = *light_direction_from_sun(135, 45, UpAxis::y);
+  config.methods = std::move(methods);
+  return config;
+}
+
+server::ServerConfig test_config() {
+  server::ServerConfig config;
+  config.port = 0;
+  config.max_body_bytes = 2 << 20;
+  config.max_batch_points = 20000;
+  config.max_pcf = 15;
+  config.cors_origins = {kAllowedOrigin};
+  config.keep_alive_timeout_s = 1;
+  return config;
+}
+
+// A server running run() on its own thread; stopped and joined on destruction.
+class RunningServer {
+ public:
+  RunningServer(const server::ServerConfig& config, const std::filesystem::path* store_dir) {
+    auto bound = server::Server::bind(config);
+    EXPECT_TRUE(bound.ok()) << bound.error().message;
+    server_ = std::move(*bound);
+    if (store_dir) {
+      Status s = server_->attach_store(*store_dir);
+      EXPECT_TRUE(s.ok()) << s.error().message;
+    }
+    thread_ = std::thread([this] { EXPECT_TRUE(server_->run().ok()); });
+    // Wait until it answers, so stop() cannot race with the listener's start.
+    httplib::Client probe("127.0.0.1", port());
+    for (int i = 0; i < 200 && !probe.Get("/healthz"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ~RunningServer() {
+    server_->stop();
+    thread_.join();
+  }
+  int port() const { return server_->port(); }
+  server::Server& server() { return *server_; }
+  httplib::Client client() const {
+    httplib::Client c("127.0.0.1", port());
+    c.set_keep_alive(true);
+    c.set_tcp_nodelay(true);
+    c.set_read_timeout(20, 0);
+    return c;
+  }
+
+ private:
+  std::unique_ptr<server::Server> server_;
+  std::thread thread_;
+};
+
+std::string encode_points(const std::vector<Vec3>& points) {
+  std::string body(points.size() * 12, '\0');
+  for (size_t i = 0; i < points.size(); ++i)
+    for (int a = 0; a < 3; ++a) {
+      uint32_t bits = std::bit_cast<uint32_t>(float(points[i][a]));
+      for (int b = 0; b < 4; ++b) body[i * 12 + a * 4 + b] = char(bits >> (8 * b));
+    }
+  return body;
+}
+
+std::vector<float> decode_floats(const std::string& body) {
+  std::vector<float> out(body.size() / 4);
+  for (size_t i = 0; i < out.size(); ++i) {
+    uint32_t bits = 0;
+    for (int b = 0; b < 4; ++b) bits |= uint32_t(uint8_t(body[i * 4 + b])) << (8 * b);
+    out[i] = std::bit_cast<float>(bits);
+  }
+  return out;
+}
+
+json points_json(const std::vector<Vec3>& points) {
+  json array = json::array();
+  for (const Vec3& p : points) array.push_back({p[0], p[1], p[2]});
+  return array;
+}
+
+std::string shadow_url(const Vec3& p, const std::string& extra = "") {
+  char buffer[160];
+  std::snprintf(buffer, sizeof buffer, "/v1/shadow?x=%.17g&y=%.17g&z=%.17g", p[0], p[1], p[2]);
+  return buffer + extra;
+}
+
+// Status and JSON error shape of a 4xx/5xx.
+void expect_json_error(const httplib::Result& res, int status, const std::string& what) {
+  ASSERT_TRUE(res) << what << ": no response";
+  EXPECT_EQ(res->status, status) << what << ": " << res->body;
+  auto body = json::parse(res->body, nullptr, false);
+  ASSERT_TRUE(body.is_object()) << what << ": " << res->body;
+  EXPECT_TRUE(body.contains("error") && body["error"].is_string()) << what;
+  EXPECT_TRUE(body.contains("code") && body["code"].is_string()) << what;
+}
+
+std::string strong_etag(uint64_t checksum) {
+  std::string etag(1, '"');
+  etag += store::checksum_hex(checksum);
+  etag += '"';
+  return etag;
+}
+
+uint64_t metric(const std::string& text, const std::string& name) {
+  size_t at = text.find("\n" + name + " ");
+  if (at == std::string::npos) return 0;
+  return std::stoull(text.substr(at + name.size() + 2));
+}
+
+class ServerTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir;
+    store_ = dir_->path() / "bunny.store";
+    auto built = run_build(bunny_config(store_, {store::Method::raw, store::Method::mh, store::Method::mmh}));
+    ASSERT_TRUE(built.ok()) << built.error().message;
+    std::filesystem::copy(store_, dir_->path() / "reference.store", std::filesystem::copy_options::recursive);
+    auto map = ShadowMap::open(dir_->path() / "reference.store");
+    ASSERT_TRUE(map.ok()) << map.error().message;
+    reference_ = map->release();
+    LoadOptions load;
+    load.up = UpAxis::y;
+    auto scene = load_scene(testing::shared_scene(kBunny), load);
+    ASSERT_TRUE(scene.ok());
+    points_ = new std::vector<Vec3>;
+    for (const Receiver& r : sample_receivers(*scene, 10000, 7)) points_->push_back(r.position);
+    points_->push_back({1e6, 0, 0});  // outside the map
+    points_->push_back({0, -1e6, 3});
+    server_ = new RunningServer(test_config(), &store_);
+  }
+  static void TearDownTestSuite() {
+    delete server_;
+    delete reference_;
+    delete points_;
+    delete dir_;
+  }
+
+  static inline TempDir* dir_ = nullptr;
+  static inline std::filesystem::path store_;
+  static inline ShadowMap* reference_ = nullptr;
+  static inline std::vector<Vec3>* points_ = nullptr;
+  static inline RunningServer* server_ = nullptr;
+};
+
+TEST_F(ServerTest, MetaIsTileJsonWithTheShadowFrame) {
+  auto cli = server_->client();
+  auto res = cli.Get("/v1/meta");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200);
+  auto meta = json::parse(res->body);
+  EXPECT_EQ(meta["tilejson"], "3.0.0");
+  EXPECT_EQ(meta["scheme"], "xyz");
+  EXPECT_EQ(meta["tiles"][0], "/v1/tiles/{method}/{z}/{x}/{y}");
+  EXPECT_EQ(meta["minzoom"], 2);
+  EXPECT_EQ(meta["maxzoom"], 2);
+  EXPECT_EQ(meta["bounds"], json({0.0, 0.0, 512.0, 512.0}));
+  const json& shadow = meta["shadow"];
+  EXPECT_EQ(shadow["resolution"], 512);
+  EXPECT_EQ(shadow["tile_size"], 128);
+  EXPECT_EQ(shadow["levels"], 10);
+  EXPECT_EQ(shadow["methods"], json({"raw", "mh", "mmh"}));
+  EXPECT_EQ(shadow["format_version"], kStoreFormatVersion);
+  EXPECT_EQ(shadow["build_id"], reference_->meta().config_hash);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(shadow["light"]["direction"][i].get<double>(), reference_->frame().direction()[i]);
+  EXPECT_TRUE(shadow["build_stats"].is_object());
+  EXPECT_EQ(meta["name"], "stanford-bunny.obj") << "no server paths in the document";
+}
+
+TEST_F(ServerTest, HealthAndMetrics) {
+  auto cli = server_->client();
+  auto health = cli.Get("/healthz");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(health->status, 200);
+  auto before = cli.Get("/metrics");
+  ASSERT_TRUE(before);
+  EXPECT_EQ(before->status, 200);
+  EXPECT_NE(before->get_header_value("Content-Type").find("text/plain"), std::string::npos);
+  ASSERT_TRUE(cli.Get(shadow_url((*points_)[0])));
+  ASSERT_TRUE(cli.Post("/v1/shadow", json{{"points", points_json({(*points_)[1], (*points_)[2]})}}.dump(),
+                       "application/json"));
+  ASSERT_TRUE(cli.Get("/v1/tiles/raw/2/9/9"));
+  auto after = cli.Get("/metrics");
+  ASSERT_TRUE(after);
+  EXPECT_EQ(metric(after->body, "shadowtiles_points_answered_total"),
+            metric(before->body, "shadowtiles_points_answered_total") + 3);
+  EXPECT_GT(metric(after->body, "shadowtiles_tile_cache_misses_total"), 0u);
+  EXPECT_GT(metric(after->body, "shadowtiles_tile_cache_bytes"), 0u);
+  EXPECT_NE(after->body.find("shadowtiles_http_requests_total{route=\"/v1/tiles\",method=\"GET\",status=\"404\"}"),
+            std::string::npos);
+  EXPECT_NE(after->body.find("shadowtiles_http_request_duration_seconds_bucket{route=\"/v1/shadow\",le=\"+Inf\"}"),
+            std::string::npos);
+}
+
+// 10,000 surface points (+2 outside the map), every method: single GETs equal ShadowMap::query,
+// JSON PCF batches equal query_pcf, binary batches equal JSON batches and the decoder.
+TEST_F(ServerTest, AnswersEqualTheDecoderForEveryMethod) {
+  auto cli = server_->client();
+  const std::vector<Vec3>& points = *points_;
+  for (store::Method method : reference_->meta().methods) {
+    const std::string name = store::method_name(method);
+    size_t mismatches = 0, shadowed = 0;
+    for (const Vec3& p : points) {
+      auto res = cli.Get(shadow_url(p, "&method=" + name));
+      ASSERT_TRUE(res);
+      ASSERT_EQ(res->status, 200) << res->body;
+      auto got = json::parse(res->body);
+      auto want = reference_->query(p, method);
+      ASSERT_TRUE(want.ok());
+      shadowed += !want->lit;
+      mismatches += got["lit"].get<double>() != (want->lit ? 1.0 : 0.0) || got["shadowed"] != !want->lit ||
+                    got["outside_map"] != want->outside_map;
+      if (!want->outside_map) {
+        mismatches += got["u"].get<double>() != want->light.u || got["v"].get<double>() != want->light.v ||
+                      got["depth"].get<double>() != want->light.depth;
+      }
+    }
+    EXPECT_EQ(mismatches, 0u) << name;
+    EXPECT_GT(shadowed, points.size() / 20) << name << ": the sample must hold shadowed points";
+
+    // PCF 3x3 as one JSON batch.
+    auto res = cli.Post("/v1/shadow", json{{"points", points_json(points)}, {"pcf", 3}, {"method", name}}.dump(),
+                        "application/json");
+    ASSERT_TRUE(res);
+    ASSERT_EQ(res->status, 200) << res->body;
+    auto batch = json::parse(res->body);
+    ASSERT_EQ(batch["lit"].size(), points.size());
+    EXPECT_EQ(batch["outside_map"], json({points.size() - 2, points.size() - 1}));
+    size_t pcf_mismatches = 0, fractional = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      auto want = reference_->query_pcf(points[i], method, 3);
+      ASSERT_TRUE(want.ok());
+      pcf_mismatches += batch["lit"][i].get<double>() != double(float(*want));
+      fractional += *want > 0 && *want < 1;
+    }
+    EXPECT_EQ(pcf_mismatches, 0u) << name;
+    EXPECT_GT(fractional, 0u) << name << ": some kernels straddle a shadow edge";
+
+    // A single PCF GET.
+    auto one = cli.Get(shadow_url(points[3], "&pcf=5&method=" + name));
+    ASSERT_TRUE(one);
+    EXPECT_EQ(json::parse(one->body)["lit"].get<double>(), *reference_->query_pcf(points[3], method, 5));
+
+    // Binary batch of float32 points = JSON batch of the same (float-rounded) points = decoder.
+    std::vector<Vec3> rounded;
+    for (const Vec3& p : points) rounded.push_back({double(float(p[0])), double(float(p[1])), double(float(p[2]))});
+    auto binary = cli.Post(("/v1/shadow?method=" + name).c_str(), encode_points(rounded), "application/octet-stream");
+    ASSERT_TRUE(binary);
+    ASSERT_EQ(binary->status, 200) << binary->body;
+    EXPECT_EQ(binary->get_header_value("X-Shadow-Outside-Map"), "2");
+    auto lit = decode_floats(binary->body);
+    ASSERT_EQ(lit.size(), points.size());
+    auto as_json = cli.Post("/v1/shadow", json{{"points", points_json(rounded)}, {"method", name}}.dump(),
+                            "application/json");
+    ASSERT_TRUE(as_json);
+    auto json_lit = json::parse(as_json->body)["lit"];
+    size_t binary_mismatches = 0;
+    for (size_t i = 0; i < rounded.size(); ++i) {
+      auto want = reference_->query(rounded[i], method);
+      ASSERT_TRUE(want.ok());
+      binary_mismatches += lit[i] != (want->lit ? 1.0f : 0.0f) || json_lit[i].get<double>() != double(lit[i]);
+    }
+    EXPECT_EQ(binary_mismatches, 0u) << name;
+  }
+}
+
+TEST_F(ServerTest, QueryOptionsLevelAndBias) {
+  auto cli = server_->client();
+  const Vec3 p = (*points_)[5];
+  auto res = cli.Get(shadow_url(p, "&method=mh&level=4&bias=0.001"));
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200) << res->body;
+  auto want = reference_->query(p, store::Method::mh, 0.001, 4u);
+  ASSERT_TRUE(want.ok());
+  EXPECT_EQ(json::parse(res->body)["lit"].get<double>(), want->lit ? 1.0 : 0.0);
+  auto outside = cli.Get(shadow_url({1e6, 0, 0}));
+  ASSERT_TRUE(outside);
+  auto body = json::parse(outside->body);
+  EXPECT_EQ(body["lit"].get<double>(), 1.0);
+  EXPECT_EQ(body["outside_map"], true);
+}
+
+TEST_F(ServerTest, TilesAreTheStoredBlobsWithEtagsAnd304) {
+  auto cli = server_->client();
+  const TileLayout& layout = reference_->layout();
+  size_t served = 0, empty = 0;
+  for (store::Method method : reference_->meta().methods) {
+    for (uint32_t y = 0; y < layout.tiles_per_side(); ++y) {
+      for (uint32_t x = 0; x < layout.tiles_per_side(); ++x) {
+        std::string url = std::string("/v1/tiles/") + store::method_name(method) + "/2/" + std::to_string(x) + "/" +
+                          std::to_string(y);
+        auto res = cli.Get(url);
+        ASSERT_TRUE(res);
+        auto stored = reference_->store().get(store::Database::tiles, store::encode_tile_key({method, 2, x, y}));
+        ASSERT_TRUE(stored.ok());
+        if (!stored->has_value()) {
+          EXPECT_EQ(res->status, 204) << url;
+          EXPECT_TRUE(res->body.empty());
+          ++empty;
+          continue;
+        }
+        ASSERT_EQ(res->status, 200) << url;
+        ++served;
+        EXPECT_EQ(res->body, std::string((*stored)->begin(), (*stored)->end())) << "bytes unchanged: " << url;
+        auto header = store::check_blob(**stored);
+        ASSERT_TRUE(header.ok());
+        std::string etag = strong_etag(header->checksum);
+        EXPECT_EQ(res->get_header_value("ETag"), etag);
+        EXPECT_EQ(res->get_header_value("Cache-Control"), "public, max-age=86400, immutable");
+        EXPECT_EQ(res->get_header_value("Content-Type"), "application/octet-stream");
+
+        auto again = cli.Get(url, {{"If-None-Match", etag}});
+        ASSERT_TRUE(again);
+        EXPECT_EQ(again->status, 304);
+        EXPECT_TRUE(again->body.empty());
+        EXPECT_EQ(again->get_header_value("ETag"), etag);
+        auto listed = cli.Get(url, {{"If-None-Match", "\"0000000000000000\", W/" + etag}});
+        ASSERT_TRUE(listed);
+        EXPECT_EQ(listed->status, 304);
+        auto stale = cli.Get(url, {{"If-None-Match", "\"0000000000000000\""}});
+        ASSERT_TRUE(stale);
+        EXPECT_EQ(stale->status, 200);
+
+        auto head = cli.Head(url);
+        ASSERT_TRUE(head);
+        EXPECT_EQ(head->status, 200);
+        EXPECT_TRUE(head->body.empty());
+        EXPECT_EQ(head->get_header_value("ETag"), etag);
+        EXPECT_EQ(head->get_header_value("Content-Length"), std::to_string((*stored)->size()));
+      }
+    }
+  }
+  EXPECT_GT(served, 0u);
+  EXPECT_GT(empty, 0u) << "the bunny leaves some tiles empty";
+  EXPECT_TRUE(server::if_none_match_matches("*", "\"ab\""));
+  EXPECT_FALSE(server::if_none_match_matches("", "\"ab\""));
+  EXPECT_FALSE(server::if_none_match_matches("ab", "\"ab\""));
+}
+
+TEST_F(ServerTest, SkipListIs404UntilStored) {
+  auto cli = server_->client();
+  auto res = cli.Get("/v1/skiplist");
+  expect_json_error(res, 404, "skiplist");
+  EXPECT_NE(res->body.find("no skip list stored for method"), std::string::npos);
+  expect_json_error(cli.Get("/v1/skiplist?method=mh"), 404, "skiplist mh");
+  expect_json_error(cli.Get("/v1/skiplist?method=bogus"), 400, "skiplist bogus");
+  expect_json_error(cli.Get("/v1/skiplist?method=dagmh"), 404, "skiplist absent method");
+}
+
+TEST_F(ServerTest, Cors) {
+  auto cli = server_->client();
+  auto allowed = cli.Get("/v1/meta", {{"Origin", kAllowedOrigin}});
+  ASSERT_TRUE(allowed);
+  EXPECT_EQ(allowed->get_header_value("Access-Control-Allow-Origin"), kAllowedOrigin);
+  EXPECT_EQ(allowed->get_header_value("Vary"), "Origin");
+  auto denied = cli.Get("/v1/meta", {{"Origin", "https://evil.example"}});
+  ASSERT_TRUE(denied);
+  EXPECT_EQ(denied->status, 200);
+  EXPECT_FALSE(denied->has_header("Access-Control-Allow-Origin"));
+  EXPECT_EQ(denied->get_header_value("Vary"), "Origin");
+  auto error = cli.Get("/v1/shadow?x=1", {{"Origin", kAllowedOrigin}});
+  ASSERT_TRUE(error);
+  EXPECT_EQ(error->status, 400);
+  EXPECT_EQ(error->get_header_value("Access-Control-Allow-Origin"), kAllowedOrigin) << "errors readable by the page";
+
+  auto preflight = cli.Options("/v1/shadow", {{"Origin", kAllowedOrigin}, {"Access-Control-Request-Method", "POST"},
+                                              {"Access-Control-Request-Headers", "content-type"}});
+  ASSERT_TRUE(preflight);
+  EXPECT_EQ(preflight->status, 204);
+  EXPECT_EQ(preflight->get_header_value("Access-Control-Allow-Origin"), kAllowedOrigin);
+  EXPECT_NE(preflight->get_header_value("Access-Control-Allow-Methods").find("POST"), std::string::npos);
+  EXPECT_NE(preflight->get_header_value("Access-Control-Allow-Headers").find("Content-Type"), std::string::npos);
+  auto refused = cli.Options("/v1/shadow", {{"Origin", "https://evil.example"}, {"Access-Control-Request-Method", "POST"}});
+  expect_json_error(refused, 403, "preflight from another origin");
+  EXPECT_FALSE(refused->has_header("Access-Control-Allow-Origin"));
+}
+
+TEST_F(ServerTest, EveryBadInputGetsA4xxAndTheServerKeepsAnswering) {
+  auto cli = server_->client();
+  const std::vector<std::pair<std::string, int>> gets = {
+      {"/v1/shadow", 400},
+      {"/v1/shadow?x=1&y=2", 400},
+      {"/v1/shadow?x=abc&y=0&z=0", 400},
+      {"/v1/shadow?x=&y=0&z=0", 400},
+      {"/v1/shadow?x=1x&y=0&z=0", 400},
+      {"/v1/shadow?x=nan&y=0&z=0", 400},
+      {"/v1/shadow?x=inf&y=0&z=0", 400},
+      {"/v1/shadow?x=-inf&y=0&z=0", 400},
+      {"/v1/shadow?x=1e999&y=0&z=0", 400},
+      {"/v1/shadow?x=0&y=0&z=0&x=1", 400},
+      {"/v1/shadow?x=0&y=0&z=0&pcf=0", 400},
+      {"/v1/shadow?x=0&y=0&z=0&pcf=2", 400},
+      {"/v1/shadow?x=0&y=0&z=0&pcf=17", 400},
+      {"/v1/shadow?x=0&y=0&z=0&pcf=99999999999999999999999", 400},
+      {"/v1/shadow?x=0&y=0&z=0&pcf=-3", 400},
+      {"/v1/shadow?x=0&y=0&z=0&pcf=3.0", 400},
+      {"/v1/shadow?x=0&y=0&z=0&method=bogus", 400},
+      {"/v1/shadow?x=0&y=0&z=0&method=dagmh", 400},
+      {"/v1/shadow?x=0&y=0&z=0&method=", 400},
+      {"/v1/shadow?x=0&y=0&z=0&level=10", 400},
+      {"/v1/shadow?x=0&y=0&z=0&level=-1", 400},
+      {"/v1/shadow?x=0&y=0&z=0&level=256", 400},
+      {"/v1/shadow?x=0&y=0&z=0&bias=-1", 400},
+      {"/v1/shadow?x=0&y=0&z=0&bias=nan", 400},
+      {"/v1/shadow?x=0&y=0&z=0&pfc=3", 400},
+      {"/v1/tiles/raw/2/x/1", 400},
+      {"/v1/tiles/raw/2/1/1.png", 400},
+      {"/v1/tiles/raw/2/-1/0", 400},
+      {"/v1/tiles/raw/2/99999999999/0", 400},
+      {"/v1/tiles/bogus/2/0/0", 400},
+      {"/v1/tiles/dagmh/2/0/0", 404},
+      {"/v1/tiles/raw/3/0/0", 404},
+      {"/v1/tiles/raw/0/0/0", 404},
+      {"/v1/tiles/raw/2/4/0", 404},
+      {"/v1/tiles/raw/2/0/4", 404},
+      {"/v1/tiles/raw/2/0", 404},
+      {"/v1/nope", 404},
+      {std::string(7000, 'a').insert(0, 1, '/'), 404},
+      {"/v1/tiles/raw/2/" + std::string(7000, '1') + "/0", 400},
+      {"/v1/shadow?x=" + std::string(7000, '9') + "&y=0&z=0", 400},
+  };
+  for (const auto& [url, status] : gets) expect_json_error(cli.Get(url), status, "GET " + url.substr(0, 80));
+  {
+    auto res = cli.Get(std::string(20000, 'a').insert(0, 1, '/'));
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, 414);
+  }
+
+  const std::string good_point = json{{"points", {{0, 0.1, 0}}}}.dump();
+  struct Post {
+    std::string path, body, type;
+    int status;
+  };
+  std::string deep(100000, '[');
+  const std::vector<Post> posts = {
+      {"/v1/shadow", good_point, "text/plain", 415},
+      {"/v1/shadow", good_point, "application/x-www-form-urlencoded", 415},
+      {"/v1/shadow", "{", "application/json", 400},
+      {"/v1/shadow", "", "application/json", 400},
+      {"/v1/shadow", "[]", "application/json", 400},
+      {"/v1/shadow", "{}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": 3}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, 0]]}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, 0, 0, 0]]}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, \"a\", 0]]}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, 1e999, 0]]}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, NaN, 0]]}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[[0, 0, 0]]]}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [], \"points\": []}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, 0, 0]], \"pcf\": 4}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, 0, 0]], \"pcf\": \"3\"}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, 0, 0]], \"pcf\": 99}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, 0, 0]], \"method\": \"bogus\"}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, 0, 0]], \"method\": \"dagmh\"}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, 0, 0]], \"level\": 99}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, 0, 0]], \"bias\": -1}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, 0, 0]], \"extra\": 1}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, 0, 0]], \"pcf\": [3]}", "application/json", 400},
+      {"/v1/shadow", "{\"points\": [[0, 0, 0]]} trailing", "application/json", 400},
+      {"/v1/shadow?pcf=3", good_point, "application/json", 400},
+      {"/v1/shadow", deep, "application/json", 400},
+      {"/v1/shadow", std::string(13, '\0'), "application/octet-stream", 400},
+      {"/v1/shadow", std::string(11, '\0'), "application/octet-stream", 400},
+      {"/v1/shadow", encode_points({{0, NAN, 0}}), "application/octet-stream", 400},
+      {"/v1/shadow", encode_points({{0, 0, INFINITY}}), "application/octet-stream", 400},
+      {"/v1/shadow?pcf=4", encode_points({{0, 0, 0}}), "application/octet-stream", 400},
+      {"/v1/shadow?method=bogus", encode_points({{0, 0, 0}}), "application/octet-stream", 400},
+      {"/v1/shadow?nope=1", encode_points({{0, 0, 0}}), "application/octet-stream", 400},
+      {"/v1/shadow", std::string(3 << 20, ' '), "application/json", 413},
+      {"/v1/shadow", std::string(12 * 20001, '\0'), "application/octet-stream", 413},
+      {"/v1/shadow", json{{"points", points_json(std::vector<Vec3>(20001, Vec3{0, 0, 0}))}}.dump(), "application/json", 413},
+      {"/v1/meta", "{}", "application/json", 404},
+  };
+  for (const Post& p : posts)
+    expect_json_error(cli.Post(p.path.c_str(), p.body, p.type.c_str()), p.status,
+                      "POST " + p.path + " " + p.type + " " + p.body.substr(0, 40));
+  auto empty_binary = cli.Post("/v1/shadow", "", "application/octet-stream");
+  ASSERT_TRUE(empty_binary);
+  EXPECT_EQ(empty_binary->status, 200) << "zero points is a valid (empty) batch";
+  EXPECT_TRUE(empty_binary->body.empty());
+
+  expect_json_error(cli.Delete("/v1/meta"), 405, "DELETE");
+  expect_json_error(cli.Put("/v1/meta", "x", "text/plain"), 405, "PUT");
+
+  // A raw request line the HTTP layer cannot parse, then the server still answers.
+  {
+    httplib::Client raw("127.0.0.1", server_->port());
+    auto garbage = raw.Get("/v1/shadow?x=%zz&y=0&z=0");
+    ASSERT_TRUE(garbage);
+    EXPECT_EQ(garbage->status, 400);
+  }
+  auto health = cli.Get("/healthz");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(health->status, 200);
+  auto answer = cli.Get(shadow_url((*points_)[0]));
+  ASSERT_TRUE(answer);
+  EXPECT_EQ(answer->status, 200);
+}
+
+// 8 client threads x 1,000 mixed requests against the 2-thread server: no errors, every answer
+// equals the decoder's.
+TEST_F(ServerTest, EightConcurrentClients) {
+  constexpr int kThreads = 8, kRequests = 1000;
+  const std::vector<Vec3>& points = *points_;
+  const auto& methods = reference_->meta().methods;
+  std::atomic<int> failures{0};
+  std::vector<std::string> messages(kThreads);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t] {
+      auto cli = server_->client();
+      std::mt19937 random(t);
+      auto fail = [&](const std::string& why) {
+        if (failures.fetch_add(1) < 5) messages[t] = why;
+      };
+      for (int i = 0; i < kRequests; ++i) {
+        const Vec3& p = points[random() % points.size()];
+        store::Method method = methods[random() % methods.size()];
+        const std::string name = store::method_name(method);
+        switch (i % 5) {
+          case 0: {
+            auto res = cli.Get(shadow_url(p, "&method=" + name));
+            auto want = reference_->query(p, method);
+            if (!res || res->status != 200 || json::parse(res->body)["lit"].get<double>() != (want->lit ? 1.0 : 0.0))
+              fail("point " + name);
+            break;
+          }
+          case 1: {
+            auto res = cli.Get(shadow_url(p, "&pcf=3&method=" + name));
+            auto want = reference_->query_pcf(p, method, 3);
+            if (!res || res->status != 200 || json::parse(res->body)["lit"].get<double>() != *want) fail("pcf " + name);
+            break;
+          }
+          case 2: {
+            uint32_t x = random() % 4, y = random() % 4;
+            auto res = cli.Get("/v1/tiles/" + name + "/2/" + std::to_string(x) + "/" + std::to_string(y));
+            auto stored = reference_->store().get(store::Database::tiles, store::encode_tile_key({method, 2, x, y}));
+            bool ok = res && (stored->has_value()
+                                  ? res->status == 200 && res->body == std::string((*stored)->begin(), (*stored)->end())
+                                  : res->status == 204);
+            if (!ok) fail("tile " + name);
+            break;
+          }
+          case 3: {
+            std::vector<Vec3> some;
+            for (int k = 0; k < 50; ++k) some.push_back(points[random() % points.size()]);
+            auto res = cli.Post("/v1/shadow", json{{"points", points_json(some)}, {"method", name}}.dump(),
+                                "application/json");
+            if (!res || res->status != 200) {
+              fail("json batch");
+              break;
+            }
+            auto lit = json::parse(res->body)["lit"];
+            for (size_t k = 0; k < some.size(); ++k)
+              if (lit[k].get<double>() != (reference_->query(some[k], method)->lit ? 1.0 : 0.0)) fail("json batch value");
+            break;
+          }
+          default: {
+            std::vector<Vec3> some;
+            for (int k = 0; k < 50; ++k) {
+              const Vec3& q = points[random() % points.size()];
+              some.push_back({double(float(q[0])), double(float(q[1])), double(float(q[2]))});
+            }
+            auto res = cli.Post(("/v1/shadow?pcf=3&method=" + name).c_str(), encode_points(some),
+                                "application/octet-stream");
+            if (!res || res->status != 200 || res->body.size() != some.size() * 4) {
+              fail("binary batch");
+              break;
+            }
+            auto lit = decode_floats(res->body);
+            for (size_t k = 0; k < some.size(); ++k)
+              if (lit[k] != float(*reference_->query_pcf(some[k], method, 3))) fail("binary batch value");
+          }
+        }
+      }
+    });
+  }
+  for (std::thread& t : threads) t.join();
+  std::string all;
+  for (const std::string& m : messages)
+    if (!m.empty()) all += m + "; ";
+  EXPECT_EQ(failures.load(), 0) << all;
+}
+
+// A store whose tile (1, 1) fails its checksum and which holds a valid skip list blob.
+class DamagedStoreTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    store_ = dir_.path() / "damaged.store";
+    auto built = run_build(bunny_config(store_, {store::Method::raw}));
+    ASSERT_TRUE(built.ok()) << built.error().message;
+    auto store = store::Store::open(store_, {store::Store::Mode::read_write});
+    ASSERT_TRUE(store.ok());
+    auto key = store::encode_tile_key({store::Method::raw, 2, 1, 1});
+    auto blob = (*store)->get(store::Database::tiles, key);
+    ASSERT_TRUE(blob.ok() && blob->has_value());
+    std::vector<uint8_t> bytes = **blob;
+    bytes[bytes.size() / 2] ^= 0x10;
+    std::vector<uint8_t> payload = {1, 2, 3, 4, 5, 6, 7, 8};
+    skiplist_ = store::encode_blob(store::Method::raw, payload);
+    std::string skip_key = "skiplist/raw";
+    std::vector<store::Store::Put> puts{{store::Database::tiles, {key.begin(), key.end()}, bytes},
+                                        {store::Database::top, {skip_key.begin(), skip_key.end()}, skiplist_}};
+    ASSERT_TRUE((*store)->write(puts).ok());
+    store->reset();
+    // A world point whose texel lies in tile (1, 1); the map is closed again before any server
+    // opens the directory (one LMDB environment per directory and process).
+    auto map = ShadowMap::open(store_);
+    ASSERT_TRUE(map.ok());
+    in_corrupt_tile_ = (*map)->frame().to_world(LightSpacePoint{192, 192, 0.5});
+  }
+  TempDir dir_;
+  Vec3 in_corrupt_tile_{};
+  std::filesystem::path store_;
+  std::vector<uint8_t> skiplist_;
+};
+
+TEST_F(DamagedStoreTest, CorruptBlobIsNeverServedAndHealthWaitsForTheStore) {
+  RunningServer running(test_config(), nullptr);
+  auto cli = running.client();
+  expect_json_error(cli.Get("/healthz"), 503, "healthz before the store is attached");
+  expect_json_error(cli.Get("/v1/meta"), 503, "meta before the store is attached");
+  expect_json_error(cli.Get("/v1/shadow?x=0&y=0&z=0"), 503, "shadow before the store is attached");
+  ASSERT_TRUE(running.server().attach_store(store_).ok());
+  auto health = cli.Get("/healthz");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(health->status, 200);
+
+  auto corrupt = cli.Get("/v1/tiles/raw/2/1/1");
+  expect_json_error(corrupt, 500, "corrupt tile");
+  EXPECT_EQ(json::parse(corrupt->body)["code"], "corrupt_data");
+  EXPECT_FALSE(corrupt->has_header("ETag"));
+  EXPECT_EQ(corrupt->body.find("STB1"), std::string::npos) << "never the bytes";
+  auto head = cli.Head("/v1/tiles/raw/2/1/1");
+  ASSERT_TRUE(head);
+  EXPECT_EQ(head->status, 500);
+
+  // A point whose texel lies in the corrupt tile: an error, never an answer.
+  const Vec3& world = in_corrupt_tile_;
+  char url[200];
+  std::snprintf(url, sizeof url, "/v1/shadow?x=%.17g&y=%.17g&z=%.17g", world[0], world[1], world[2]);
+  expect_json_error(cli.Get(url), 500, "point in the corrupt tile");
+  expect_json_error(cli.Post("/v1/shadow", encode_points({world}), "application/octet-stream"), 500,
+                    "batch touching the corrupt tile");
+
+  auto good = cli.Get("/v1/tiles/raw/2/1/2");
+  ASSERT_TRUE(good);
+  EXPECT_EQ(good->status, 200) << "other tiles still served";
+
+  auto skiplist = cli.Get("/v1/skiplist");
+  ASSERT_TRUE(skiplist);
+  ASSERT_EQ(skiplist->status, 200);
+  EXPECT_EQ(skiplist->body, std::string(skiplist_.begin(), skiplist_.end()));
+  std::string etag = strong_etag(store::check_blob(skiplist_)->checksum);
+  EXPECT_EQ(skiplist->get_header_value("ETag"), etag);
+  auto cached = cli.Get("/v1/skiplist?method=raw", {{"If-None-Match", etag}});
+  ASSERT_TRUE(cached);
+  EXPECT_EQ(cached->status, 304);
+
+  auto metrics = cli.Get("/metrics");
+  ASSERT_TRUE(metrics);
+  EXPECT_GE(metric(metrics->body, "shadowtiles_corrupt_blobs_total"), 2u);
+}
+
+// max_connections = 1: while one keep-alive client holds the only slot, a new connection gets a
+// quick 503 instead of queueing; once the slot frees, new connections are served again.
+TEST_F(DamagedStoreTest, ConnectionsBeyondTheLimitGet503) {
+  auto config = test_config();
+  config.threads = 1;
+  config.max_connections = 1;
+  config.keep_alive_timeout_s = 5;
+  RunningServer running(config, &store_);
+  EXPECT_FALSE(running.server().attach_store(store_).ok()) << "a second attach is refused";
+  auto status_of_new_connection = [&] {
+    httplib::Client c("127.0.0.1", running.port());
+    auto res = c.Get("/healthz");
+    return res ? res->status : -1;
+  };
+  auto holder = std::make_unique<httplib::Client>("127.0.0.1", running.port());
+  holder->set_keep_alive(true);
+  int held = -1;
+  // The probe connection of RunningServer may still hold the slot for a moment.
+  for (int i = 0; i < 100 && held != 200; ++i) {
+    auto res = holder->Get("/healthz");
+    held = res ? res->status : -1;
+    if (held != 200) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(held, 200);
+  httplib::Client other("127.0.0.1", running.port());
+  expect_json_error(other.Get("/v1/meta"), 503, "connection over the limit");
+  holder.reset();  // frees the slot
+  int status = -1;
+  for (int i = 0; i < 100 && status != 200; ++i) {
+    status = status_of_new_connection();
+    if (status != 200) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(status, 200);
+}
+
+TEST(ServerConfig, StrictParsingAndOverrides) {
+  auto config = server::ServerConfig::from_json(json{{"port", 0}, {"threads", 4}, {"cors_origins", {"https://a.example"}}});
+  ASSERT_TRUE(config.ok()) << config.error().message;
+  EXPECT_EQ(config->threads, 4u);
+  EXPECT_EQ(config->host, "127.0.0.1");
+  for (const json& bad : {json{{"prot", 8080}}, json{{"port", 70000}}, json{{"port", -1}}, json{{"port", "80"}},
+                          json{{"threads", 0}}, json{{"threads", 2.5}}, json{{"max_pcf", 4}}, json{{"max_pcf", 99}},
+                          json{{"cors_origins", "https://a.example"}}, json{{"cors_origins", {"*"}}},
+                          json{{"read_timeout_s", 0}}, json{{"max_connections", 1}}, json::array()}) {
+    auto parsed = server::ServerConfig::from_json(bad);
+    EXPECT_FALSE(parsed.ok()) << bad.dump();
+    if (!parsed.ok()) {
+      EXPECT_EQ(parsed.error().code, ErrorCode::invalid_input);
+    }
+  }
+  auto shipped = server::ServerConfig::load(std::filesystem::path(SHADOWTILES_SOURCE_DIR) / "config" / "serve.json");
+  ASSERT_TRUE(shipped.ok()) << shipped.error().message;
+  EXPECT_EQ(shipped->to_json(), server::ServerConfig{}.to_json()) << "config/serve.json documents the defaults";
+}
+
+// Reads the "listening on http://host:PORT" line of a `shadowtiles serve` child.
+int read_port(FILE* out) {
+  char line[512];
+  while (std::fgets(line, sizeof line, out)) {
+    std::string text(line);
+    size_t at = text.find("listening on http://");
+    if (at != std::string::npos) return std::stoi(text.substr(text.rfind(':') + 1));
+  }
+  return -1;
+}
+
+TEST(ServeCommand, ConfigFlagsAndSigtermDrain) {
+  TempDir dir;
+  auto store_dir = dir.path() / "s";
+  ASSERT_TRUE(run_build(bunny_config(store_dir, {store::Method::raw})).ok());
+  const std::string cli = testing::cli_path().string();
+
+  std::string output;
+  ASSERT_EQ(testing::run_command(cli + " serve " + store_dir.string() + " --print-config --port 9999 --threads 3", &output), 0)
+      << output;
+  auto printed = json::parse(output.substr(output.find('{')));
+  EXPECT_EQ(printed["port"], 9999);
+  EXPECT_EQ(printed["threads"], 3);
+
+  std::ofstream(dir.path() / "bad.json") << R"({"port": 1, "unknown_key": true})";
+  output.clear();
+  EXPECT_EQ(testing::run_command(cli + " serve " + store_dir.string() + " --config " + (dir.path() / "bad.json").string(), &output), 2);
+  EXPECT_NE(output.find("unknown_key"), std::string::npos) << output;
+  output.clear();
+  EXPECT_EQ(testing::run_command(cli + " serve " + (dir.path() / "missing").string() + " --port 0", &output), 2) << output;
+
+  // The child's pid is the shell's ($$) because of exec.
+  std::string command = "sh -c 'echo pid $$; exec " + cli + " serve " + store_dir.string() +
+                        " --port 0 --config " + SHADOWTILES_SOURCE_DIR + "/config/serve.json' 2>&1";
+  FILE* child = ::popen(command.c_str(), "r");
+  ASSERT_NE(child, nullptr);
+  int pid = -1;
+  ASSERT_EQ(std::fscanf(child, "pid %d\n", &pid), 1);
+  int port = read_port(child);
+  ASSERT_GT(port, 0);
+  httplib::Client client("127.0.0.1", port);
+  auto health = client.Get("/healthz");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(health->status, 200);
+  // A batch in flight while SIGTERM arrives still completes (500k points take ~0.1 s to answer).
+  // Its connection is opened and served first, so the batch cannot arrive after the listener closed.
+  const std::string body = encode_points(std::vector<Vec3>(500000, Vec3{0, 0.1, 0}));
+  httplib::Client keep("127.0.0.1", port);
+  keep.set_keep_alive(true);
+  ASSERT_TRUE(keep.Get("/healthz"));
+  std::thread batch([&] {
+    auto res = keep.Post("/v1/shadow", body, "application/octet-stream");
+    ASSERT_TRUE(res) << httplib::to_string(res.error());
+    EXPECT_EQ(res->status, 200);
+    EXPECT_EQ(res->body.size(), 500000u * 4);
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  batch.join();
+  std::string rest;
+  char buffer[512];
+  while (std::fgets(buffer, sizeof buffer, child)) rest += buffer;
+  int status = ::pclose(child);
+  ASSERT_TRUE(WIFEXITED(status)) << rest;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << rest;
+  EXPECT_NE(rest.find("stopped on signal"), std::string::npos) << rest;
+}
+
+}  // namespace
+}  // namespace shadowtiles
