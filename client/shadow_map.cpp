@@ -135,13 +135,8 @@ std::optional<float> ShadowMap::top_value(store::Method method, uint32_t u, uint
   return it->second->value(u / layout_.tile_size(), v / layout_.tile_size(), level);
 }
 
-Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, unsigned kernel,
-                                    std::optional<double> bias, std::optional<unsigned> level,
-                                    ShadowAnswer* answer_out) const {
-  if (kernel == 0 || kernel % 2 == 0 || kernel > kMaxPcfKernel)
-    return make_error(ErrorCode::invalid_input,
-                      "pcf kernel must be odd and in [1, " + std::to_string(kMaxPcfKernel) + "]");
-  double bias_world = bias.value_or(meta_.default_bias);
+Result<std::pair<ShadowAnswer, unsigned>> ShadowMap::locate(const Vec3& world, double bias_world,
+                                                            std::optional<unsigned> level) const {
   if (Status s = check_query(world, bias_world); !s) return s.error();
   auto max_level = tile_max_level(level);
   if (!max_level) return max_level.error();
@@ -151,6 +146,21 @@ Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, uns
   if (!(answer.light.u >= 0 && answer.light.u < resolution && answer.light.v >= 0 && answer.light.v < resolution)) {
     answer.outside_map = true;
     answer.value = std::numeric_limits<float>::infinity();
+  }
+  return std::pair{answer, *max_level};
+}
+
+Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, unsigned kernel,
+                                    std::optional<double> bias, std::optional<unsigned> level,
+                                    ShadowAnswer* answer_out) const {
+  if (kernel == 0 || kernel % 2 == 0 || kernel > kMaxPcfKernel)
+    return make_error(ErrorCode::invalid_input,
+                      "pcf kernel must be odd and in [1, " + std::to_string(kMaxPcfKernel) + "]");
+  double bias_world = bias.value_or(meta_.default_bias);
+  auto located = locate(world, bias_world, level);
+  if (!located) return located.error();
+  auto [answer, max_level] = *located;
+  if (answer.outside_map) {
     if (answer_out) *answer_out = answer;
     return 1.0;
   }
@@ -176,13 +186,13 @@ Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, uns
       }
       const DecodedTile& t = **decoded;
       uint32_t lu = uint32_t(bu0 - tx * size), lv = uint32_t(bv0 - ty * size);
-      if (*max_level == 255) {
+      if (max_level == 255) {
         lit += t.lit_count(lu, lv, kw, kh, threshold);
       } else {
         for (uint32_t v = lv; v < lv + kh; ++v)
           for (uint32_t u = lu; u < lu + kw; ++u) {
             auto coarse = top_value(method, uint32_t(tx * size + u), uint32_t(ty * size + v), *level);
-            lit += threshold <= (coarse ? *coarse : t.value(u, v, *max_level));
+            lit += threshold <= (coarse ? *coarse : t.value(u, v, max_level));
           }
       }
     }
@@ -192,7 +202,7 @@ Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, uns
     auto centre = tile(method, {uint32_t(cu / size), uint32_t(cv / size)});
     if (!centre) return centre.error();
     answer.empty_tile = !*centre;
-    answer.value = *centre ? (*centre)->value(uint32_t(cu % size), uint32_t(cv % size), *max_level)
+    answer.value = *centre ? (*centre)->value(uint32_t(cu % size), uint32_t(cv % size), max_level)
                            : std::numeric_limits<float>::infinity();
   }
   double fraction = double(lit) / double(kernel * kernel);
@@ -204,17 +214,10 @@ Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, uns
 Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, std::optional<double> bias,
                                       std::optional<unsigned> level) const {
   double bias_world = bias.value_or(meta_.default_bias);
-  if (Status s = check_query(world, bias_world); !s) return s.error();
-  auto max_level = tile_max_level(level);
-  if (!max_level) return max_level.error();
-  ShadowAnswer answer;
-  answer.light = frame_.to_light(world);
-  const double resolution = layout_.resolution();
-  if (!(answer.light.u >= 0 && answer.light.u < resolution && answer.light.v >= 0 && answer.light.v < resolution)) {
-    answer.outside_map = true;
-    answer.value = std::numeric_limits<float>::infinity();
-    return answer;
-  }
+  auto located = locate(world, bias_world, level);
+  if (!located) return located.error();
+  auto [answer, max_level] = *located;
+  if (answer.outside_map) return answer;
   uint32_t u = uint32_t(answer.light.u), v = uint32_t(answer.light.v);
   const uint32_t size = layout_.tile_size();
   if (level) {
@@ -234,7 +237,7 @@ Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, s
     answer.value = std::numeric_limits<float>::infinity();
     return answer;
   }
-  answer.value = (*decoded)->value(u % size, v % size, *max_level);
+  answer.value = (*decoded)->value(u % size, v % size, max_level);
   // Same comparison as query_pcf, so a 1x1 kernel equals a point query exactly.
   answer.lit = float(answer.light.depth - frame_.depth_from_world(bias_world)) <= answer.value;
   return answer;

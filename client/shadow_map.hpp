@@ -82,6 +82,10 @@ class ShadowMap {
   ShadowMap(std::unique_ptr<store::Store> store, StoreMeta meta, LightFrame frame, TileLayout layout, Options options)
       : store_(std::move(store)), meta_(std::move(meta)), frame_(frame), layout_(layout), options_(options) {}
 
+  // Validates a query and maps the point to light space; the answer is flagged outside_map (lit)
+  // when it falls off the map. Also returns the max level inside a tile tree for `level`.
+  Result<std::pair<ShadowAnswer, unsigned>> locate(const Vec3& world, double bias_world,
+                                                   std::optional<unsigned> level) const;
   // Query level -> max level inside a tile tree (255 = finest).
   Result<unsigned> tile_max_level(std::optional<unsigned> level) const;
 
