@@ -13,6 +13,11 @@ packages=(
   python3-matplotlib       # charts of the benchmark report (bench/make_report.py)
   wrk curl                 # HTTP load benchmark (bench/server_load.sh)
 )
+# --list: print the package names (one place defines them; .ci/run installs from it).
+if [ "${1:-}" = "--list" ]; then
+  printf '%s\n' "${packages[@]}"
+  exit 0
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
