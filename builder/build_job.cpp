@@ -246,6 +246,7 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   DualDepthRenderer renderer(*device, light_scene, depth_options);
   TileEncodeOptions encode_options;
   encode_options.construction = config.construction;
+  encode_options.map_resolution = layout->resolution();
 
   // Workers: render, encode, commit, one tile at a time each.
   auto render_start = Clock::now();

@@ -3,10 +3,12 @@
 #include <chrono>
 #include <optional>
 
+#include "builder/cpvs_encoder.hpp"
 #include "builder/dagmh_encoder.hpp"
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_hierarchy.hpp"
 #include "builder/mmh_merger.hpp"
+#include "builder/sst_encoder.hpp"
 #include "client/raw_tile.hpp"
 
 namespace shadowtiles {
@@ -18,8 +20,18 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 }  // namespace
 
 bool builder_supports(store::Method method) {
-  return method == store::Method::raw || method == store::Method::mh || method == store::Method::mmh ||
-         method == store::Method::dagmh;
+  switch (method) {
+    case store::Method::raw:
+    case store::Method::mh:
+    case store::Method::mmh:
+    case store::Method::dagmh:
+      return true;
+    case store::Method::cpvs:
+      return cpvs_encoder_available();
+    case store::Method::sst:
+      return sst_encoder_available();
+  }
+  return false;
 }
 
 Result<TileEncoding> encode_tile(const std::vector<store::Method>& methods, const TileIntervals& intervals,
@@ -69,6 +81,18 @@ Result<TileEncoding> encode_tile(const std::vector<store::Method>& methods, cons
       case store::Method::dagmh: {
         if (Status s = ensure_mh(); !s) return s.error();
         auto bytes = encode_dagmh(*mh);
+        if (!bytes) return bytes.error();
+        out.payload = std::move(*bytes);
+        break;
+      }
+      case store::Method::cpvs: {
+        auto bytes = encode_cpvs_tile(intervals, options.map_resolution);
+        if (!bytes) return bytes.error();
+        out.payload = std::move(*bytes);
+        break;
+      }
+      case store::Method::sst: {
+        auto bytes = encode_sst_tile(intervals);
         if (!bytes) return bytes.error();
         out.payload = std::move(*bytes);
         break;

@@ -17,6 +17,8 @@ namespace shadowtiles {
 
 struct TileEncodeOptions {
   MhConstruction construction = MhConstruction::bottom_up;
+  // Side of the whole map in texels: CPVS quantises depth to this many steps (DESIGN.md §8).
+  uint32_t map_resolution = 0;
 };
 
 struct EncodedPayload {

@@ -11,5 +11,8 @@ void add_inspect_command(CLI::App& app, int& exit_code);
 void add_verify_command(CLI::App& app, int& exit_code);
 void add_serve_command(CLI::App& app, int& exit_code);
 void add_bench_command(CLI::App& app, int& exit_code);
+void add_render_command(CLI::App& app, int& exit_code);
+void add_stability_command(CLI::App& app, int& exit_code);
+void add_dagmh_study_command(CLI::App& app, int& exit_code);
 
 }  // namespace shadowtiles::cli

@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
   shadowtiles::cli::add_verify_command(app, exit_code);
   shadowtiles::cli::add_serve_command(app, exit_code);
   shadowtiles::cli::add_bench_command(app, exit_code);
+  shadowtiles::cli::add_render_command(app, exit_code);
+  shadowtiles::cli::add_stability_command(app, exit_code);
+  shadowtiles::cli::add_dagmh_study_command(app, exit_code);
   app.parse_complete_callback([&] {
     spdlog::set_level(verbose ? spdlog::level::debug : quiet ? spdlog::level::warn : spdlog::level::info);
   });

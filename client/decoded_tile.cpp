@@ -1,8 +1,10 @@
 #include "client/decoded_tile.hpp"
 
+#include "client/cpvs_decoder.hpp"
 #include "client/dagmh_decoder.hpp"
 #include "client/mh_decoder.hpp"
 #include "client/raw_tile.hpp"
+#include "client/sst_decoder.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -74,7 +76,7 @@ class DagMhDecodedTile final : public DecodedTile {
 uint32_t DecodedTile::lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const {
   uint32_t lit = 0;
   for (uint32_t v = v0; v < v0 + kh; ++v)
-    for (uint32_t u = u0; u < u0 + kw; ++u) lit += threshold <= value(u, v);
+    for (uint32_t u = u0; u < u0 + kw; ++u) lit += this->lit(u, v, threshold);
   return lit;
 }
 
@@ -90,6 +92,10 @@ Result<std::shared_ptr<const DecodedTile>> decode_tile(store::Method method, std
       return MhDecodedTile::make(payload);
     case store::Method::dagmh:
       return DagMhDecodedTile::make(payload);
+    case store::Method::cpvs:
+      return decode_cpvs_tile(payload);
+    case store::Method::sst:
+      return decode_sst_tile(payload);
     default:
       return make_error(ErrorCode::unsupported,
                         std::string("no decoder for method '") + store::method_name(method) + "'");

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
+#include <vector>
 
 #include "store/method.hpp"
 #include "store/result.hpp"
@@ -24,6 +26,19 @@ class DecodedTile {
   // biased depth is `threshold` (lit: threshold <= value), at full resolution. Hierarchical methods
   // override it with one descent to the box's common ancestor.
   virtual uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const;
+  // Is a receiver at tile-local texel (u, v) with biased depth `threshold` lit? Depth-map methods
+  // compare with value(); methods that store visibility itself (CPVS: voxels along depth) override
+  // it, because one value per texel cannot describe them.
+  virtual bool lit(uint32_t u, uint32_t v, float threshold, unsigned max_level = 255) const {
+    return threshold <= value(u, v, max_level);
+  }
+  // The payload's size split into named parts (e.g. DAG nodes, treelets, chunk headers), for
+  // `inspect`; empty when the method has no breakdown.
+  struct SizePart {
+    std::string name;
+    uint64_t bytes = 0;
+  };
+  virtual std::vector<SizePart> size_breakdown() const { return {}; }
 };
 
 // Decodes a blob's payload for `method`. Errors: corrupt_data (malformed payload), unsupported.

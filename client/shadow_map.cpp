@@ -192,7 +192,7 @@ Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, uns
         for (uint32_t v = lv; v < lv + kh; ++v)
           for (uint32_t u = lu; u < lu + kw; ++u) {
             auto coarse = top_value(method, uint32_t(tx * size + u), uint32_t(ty * size + v), *level);
-            lit += threshold <= (coarse ? *coarse : t.value(u, v, max_level));
+            lit += coarse ? threshold <= *coarse : t.lit(u, v, threshold, max_level);
           }
       }
     }
@@ -239,7 +239,8 @@ Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, s
   }
   answer.value = (*decoded)->value(u % size, v % size, max_level);
   // Same comparison as query_pcf, so a 1x1 kernel equals a point query exactly.
-  answer.lit = float(answer.light.depth - frame_.depth_from_world(bias_world)) <= answer.value;
+  const float threshold = float(answer.light.depth - frame_.depth_from_world(bias_world));
+  answer.lit = (*decoded)->lit(u % size, v % size, threshold, max_level);
   return answer;
 }
 

@@ -10,6 +10,7 @@ packages=(
   libzstd-dev libxxhash-dev
   libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcpp-httplib-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libpng-dev               # PNG frames of `shadowtiles render`
   python3-matplotlib       # charts of the benchmark report (bench/make_report.py)
   wrk curl                 # HTTP load benchmark (bench/server_load.sh)
 )
