@@ -24,6 +24,7 @@
 #include "client/store_meta.hpp"
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
+#include "store/serving_lock.hpp"
 #include "store/tile_key.hpp"
 
 namespace shadowtiles {
@@ -85,7 +86,7 @@ nlohmann::json build_identity(const BuildConfig& config, uint64_t scene_hash, ui
                               uint32_t tile_size) {
   nlohmann::json methods = nlohmann::json::array();
   for (store::Method m : config.methods) methods.push_back(store::method_name(m));
-  return {{"builder", builder_version()},
+  nlohmann::json identity = {{"builder", builder_version()},
           {"store_format", kStoreFormatVersion},
           {"scene_xxh64", hex64(scene_hash)},
           {"light", {config.light_direction[0], config.light_direction[1], config.light_direction[2]}},
@@ -97,6 +98,9 @@ nlohmann::json build_identity(const BuildConfig& config, uint64_t scene_hash, ui
           {"exit_margin_texels", config.exit_margin_texels},
           {"zstd_level", config.zstd_level},
           {"construction", config.construction == MhConstruction::top_down ? "top_down" : "bottom_up"}};
+  // Only when set, so stores built before the option existed keep their identity.
+  if (config.open_exit_at_far_plane) identity["open_exit_at_far_plane"] = true;
+  return identity;
 }
 
 struct WorkerTotals {
@@ -173,6 +177,9 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   store_options.no_sync = true;  // one forced sync at the end (DESIGN.md §9)
   auto opened = store::Store::open(config.store_path, store_options);
   if (!opened) return opened.error();
+  // Never rewrite a store a server answers from (store/serving_lock.hpp); held until the build ends.
+  auto serving_lock = store::ServingLock::acquire(config.store_path, store::ServingLock::Kind::build);
+  if (!serving_lock) return serving_lock.error();
   store::Store& db = **opened;
   auto existing = db.get(store::Database::meta, store::as_bytes(kMetaBuildKey));
   if (!existing) return existing.error();
@@ -243,6 +250,7 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   if (!device) return device.error();
   DualDepthOptions depth_options;
   depth_options.exit_margin = float(frame->depth_from_world(meta.exit_margin));
+  depth_options.open_exit_at_far_plane = config.open_exit_at_far_plane;
   DualDepthRenderer renderer(*device, light_scene, depth_options);
   TileEncodeOptions encode_options;
   encode_options.construction = config.construction;

@@ -44,6 +44,9 @@ struct BuildConfig {
   MhConstruction construction = MhConstruction::bottom_up;  // MH family: bottom-up or top-down
   uint64_t initial_map_size = 1ull << 30;
   bool overwrite = false;
+  // Comparison only (stability suite): open surfaces exit at the far plane, the MMH authors' rule
+  // that leaks light under open surfaces (DualDepthOptions::open_exit_at_far_plane).
+  bool open_exit_at_far_plane = false;
   // Progress callback, called from the coordinating thread about once a second.
   std::function<void(const std::string& line)> on_progress;
   // Test hook: after this many tiles are committed, the process kills itself with SIGKILL.

@@ -136,7 +136,8 @@ unsigned attach_triangles(RTCDevice device, RTCScene scene, const std::vector<fl
 }
 
 // Combines one ray's hits into its interval (rules in the header).
-DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t, float exit_margin) {
+DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t, const DualDepthOptions& options) {
+  const float exit_margin = options.exit_margin;
   // Closed hits beyond the nearest open hit were recorded before that hit shortened the ray.
   std::erase_if(closed_hits, [&](const ClosedHit& h) { return h.t > open_t; });
   // Spatial splits may report one triangle twice.
@@ -154,7 +155,7 @@ DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t
   if (closed_hits.empty() && open_t == std::numeric_limits<float>::infinity()) return interval;
   if (closed_hits.empty() || open_t <= closed_hits.front().t) {
     interval.lower = open_t;
-    interval.upper = open_t;
+    interval.upper = options.open_exit_at_far_plane ? std::max(open_t, 1.0f) : open_t;
     return interval;
   }
   interval.lower = closed_hits.front().t;
@@ -177,6 +178,75 @@ DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t
   if (heightfield_depth > 0 && open_t == std::numeric_limits<float>::infinity())
     interval.upper = std::max(interval.lower, 1.0f);
   return interval;
+}
+
+// Receivers lie anywhere in a texel, not only on its centre's ray: near a silhouette or a crease, a
+// shadowed surface other than the centre ray's exit triangle can sit, within the texel, at a depth
+// between the centre ray's entry and exit (the back of a bust just inside its outline, the far slope
+// of a ridge at a grazing sun). Such a receiver must stay shadowed, so each texel's exit is capped by
+// the shallowest depth, within the texel's square, of every surface a shadowed receiver can lie on:
+// closed or heightfield triangles facing away from the light (or edge-on), and open triangles. That
+// depth is exact: the triangle is clipped to the square and depth, linear on it, is smallest at a
+// vertex of the clipped polygon. Computed in the scene's double light-space coordinates (global
+// texels) so the result does not depend on the tiling. Returns the cap per texel of the tile
+// (+inf where nothing limits it).
+struct ClipVertex {
+  double u, v, depth;
+};
+
+// Sutherland-Hodgman against one axis-aligned edge: keeps the side where sign * (coord - bound) >= 0.
+void clip_polygon(std::vector<ClipVertex>& polygon, std::vector<ClipVertex>& scratch, bool along_u, double bound,
+                  double sign) {
+  scratch.clear();
+  const size_t n = polygon.size();
+  for (size_t k = 0; k < n; ++k) {
+    const ClipVertex& p = polygon[k];
+    const ClipVertex& q = polygon[(k + 1) % n];
+    const double dp = sign * ((along_u ? p.u : p.v) - bound), dq = sign * ((along_u ? q.u : q.v) - bound);
+    if (dp >= 0) scratch.push_back(p);
+    if ((dp >= 0) != (dq >= 0)) {
+      const double t = dp / (dp - dq);
+      scratch.push_back({p.u + t * (q.u - p.u), p.v + t * (q.v - p.v), p.depth + t * (q.depth - p.depth)});
+    }
+  }
+  polygon.swap(scratch);
+}
+
+std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord tile) {
+  const uint32_t size = scene.layout().tile_size();
+  const double u0 = double(tile.x) * size, v0 = double(tile.y) * size;
+  std::vector<float> cap(size_t(size) * size, std::numeric_limits<float>::infinity());
+  const Scene& world = scene.scene();
+  std::vector<ClipVertex> polygon, scratch;
+  for (uint32_t t : scene.triangles_of(tile)) {
+    const auto& tri = world.triangles[t];
+    const LightSpacePoint& a = scene.vertex(tri[0]);
+    const LightSpacePoint& b = scene.vertex(tri[1]);
+    const LightSpacePoint& c = scene.vertex(tri[2]);
+    const MeshKind kind = world.meshes[world.triangle_mesh[t]].kind;
+    const double nz = (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
+    if (kind != MeshKind::open && nz < 0) continue;  // faces the light: an entry surface, the lit side
+    const double lo_u = std::min({a.u, b.u, c.u}) - u0, hi_u = std::max({a.u, b.u, c.u}) - u0;
+    const double lo_v = std::min({a.v, b.v, c.v}) - v0, hi_v = std::max({a.v, b.v, c.v}) - v0;
+    if (hi_u < 0 || hi_v < 0 || lo_u >= size || lo_v >= size) continue;
+    const uint32_t i0 = uint32_t(std::max(0.0, std::floor(lo_u))), i1 = uint32_t(std::min(size - 1.0, std::floor(hi_u)));
+    const uint32_t j0 = uint32_t(std::max(0.0, std::floor(lo_v))), j1 = uint32_t(std::min(size - 1.0, std::floor(hi_v)));
+    for (uint32_t j = j0; j <= j1; ++j)
+      for (uint32_t i = i0; i <= i1; ++i) {
+        const double su = u0 + i, sv = v0 + j;  // the texel's square [su, su+1] x [sv, sv+1]
+        polygon = {{a.u, a.v, a.depth}, {b.u, b.v, b.depth}, {c.u, c.v, c.depth}};
+        clip_polygon(polygon, scratch, true, su, 1);
+        if (!polygon.empty()) clip_polygon(polygon, scratch, true, su + 1, -1);
+        if (!polygon.empty()) clip_polygon(polygon, scratch, false, sv, 1);
+        if (!polygon.empty()) clip_polygon(polygon, scratch, false, sv + 1, -1);
+        if (polygon.empty()) continue;
+        double shallowest = polygon.front().depth;
+        for (const ClipVertex& p : polygon) shallowest = std::min(shallowest, p.depth);
+        float& slot = cap[size_t(j) * size + i];
+        slot = std::min(slot, float(shallowest));
+      }
+  }
+  return cap;
 }
 
 }  // namespace
@@ -258,14 +328,26 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
       for (unsigned lane = 0; lane < kPacket && u_start + lane < size; ++lane) {
         bool open_hit = packet.hit.geomID[lane] == open_id && open_id != RTC_INVALID_GEOMETRY_ID;
         float open_t = open_hit ? packet.ray.tfar[lane] : inf;
-        DepthInterval interval = resolve_interval(lanes[lane], open_t, options_.exit_margin);
+        DepthInterval interval = resolve_interval(lanes[lane], open_t, options_);
         intervals.at(u_start + lane, v) = interval;
         if (interval.lower < 1.0f) ++local.hits;
-        if (interval.upper > interval.lower) ++local.exits;
       }
     }
   }
   (void)closed_id;
+  // Cap every exit by the receiver surfaces inside its texel (see receiver_surface_caps); the
+  // far-plane comparison rule is measured as its authors have it, uncapped.
+  const std::vector<float> caps = options_.open_exit_at_far_plane ? std::vector<float>(intervals.texels.size(),
+                                                                                       std::numeric_limits<float>::infinity())
+                                                                  : receiver_surface_caps(scene_, tile);
+  local.exits = 0;
+  for (size_t i = 0; i < intervals.texels.size(); ++i) {
+    DepthInterval& interval = intervals.texels[i];
+    if (interval.upper > interval.lower && interval.lower < 1.0f) {
+      interval.upper = std::max(interval.lower, std::min(interval.upper, caps[i] - options_.exit_margin));
+      local.exits += interval.upper > interval.lower;
+    }
+  }
   local.rays = uint64_t(size) * size;
   local.ray_seconds = seconds_since(ray_start);
   if (stats) stats->add(local);

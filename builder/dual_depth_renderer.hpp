@@ -39,6 +39,10 @@ struct DualDepthStats {
 struct DualDepthOptions {
   // Normalised depth subtracted from closed-mesh exits (see above); >= the largest query bias.
   float exit_margin = 0.0f;
+  // Comparison only, never a default (DESIGN.md §4 note): the MMH authors' rule, where a ray whose
+  // first hit is an open surface exits at the far plane (everything behind it counts as solid). It
+  // leaks light onto receivers under open surfaces; the stability suite measures how much.
+  bool open_exit_at_far_plane = false;
 };
 
 class DualDepthRenderer {

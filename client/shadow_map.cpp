@@ -10,20 +10,19 @@
 namespace shadowtiles {
 
 Result<std::unique_ptr<ShadowMap>> ShadowMap::open(const std::filesystem::path& store_dir, Options options) {
-  store::Store::Options store_options;
-  store_options.mode = store::Store::Mode::read_only;
-  auto opened = store::Store::open(store_dir, store_options);
-  if (!opened) return opened.error();
-  auto raw_meta = (*opened)->get(store::Database::meta, store::as_bytes(kMetaBuildKey));
-  if (!raw_meta) return raw_meta.error();
-  if (!raw_meta->has_value())
-    return make_error(ErrorCode::not_found, store_dir.string() + " holds no build (no meta record)");
-  auto meta = StoreMeta::parse(
-      std::string_view(reinterpret_cast<const char*>((*raw_meta)->data()), (*raw_meta)->size()));
+  auto source = LmdbTileSource::open(store_dir);
+  if (!source) return source.error();
+  return open(std::shared_ptr<const TileSource>(std::move(*source)), options);
+}
+
+Result<std::unique_ptr<ShadowMap>> ShadowMap::open(std::shared_ptr<const TileSource> source, Options options) {
+  auto meta_text = source->meta_text();
+  if (!meta_text) return meta_text.error();
+  auto meta = StoreMeta::parse(*meta_text);
   if (!meta) return meta.error();
   if (!meta->complete)
     return make_error(ErrorCode::invalid_input,
-                      store_dir.string() + " holds an incomplete build: finish it (rerun the same build) first");
+                      source->describe() + " holds an incomplete build: finish it (rerun the same build) first");
   if (meta->methods.empty()) return make_error(ErrorCode::corrupt_data, "meta lists no methods");
   auto frame = meta->light_frame();
   auto layout = meta->layout();
@@ -32,7 +31,7 @@ Result<std::unique_ptr<ShadowMap>> ShadowMap::open(const std::filesystem::path& 
   // Top trees of hierarchical methods (small: one value per tile at most), checked like any blob.
   std::map<store::Method, std::shared_ptr<const DecodedTile>> top_trees;
   for (store::Method method : meta->methods) {
-    auto blob = (*opened)->get(store::Database::top, store::as_bytes(top_tree_key(method)));
+    auto blob = source->top_blob(method);
     if (!blob) return blob.error();
     if (!blob->has_value()) continue;
     store::BlobHeader header;
@@ -45,7 +44,7 @@ Result<std::unique_ptr<ShadowMap>> ShadowMap::open(const std::filesystem::path& 
       return make_error(ErrorCode::corrupt_data, "top tree size differs from the tile grid");
     top_trees[method] = std::move(*tree);
   }
-  auto map = std::unique_ptr<ShadowMap>(new ShadowMap(std::move(*opened), std::move(*meta), *frame, *layout, options));
+  auto map = std::unique_ptr<ShadowMap>(new ShadowMap(std::move(source), std::move(*meta), *frame, *layout, options));
   map->top_trees_ = std::move(top_trees);
   return map;
 }
@@ -65,8 +64,7 @@ Result<std::shared_ptr<const DecodedTile>> ShadowMap::tile(store::Method method,
     }
     ++stats_.misses;
   }
-  auto encoded_key = store::encode_tile_key(key);
-  auto blob = store_->get(store::Database::tiles, encoded_key);
+  auto blob = source_->tile_blob(key);
   if (!blob) return blob.error();
   std::shared_ptr<const DecodedTile> decoded;
   if (blob->has_value()) {
@@ -97,6 +95,19 @@ Result<std::shared_ptr<const DecodedTile>> ShadowMap::tile(store::Method method,
     lru_.pop_back();
   }
   return decoded;
+}
+
+Status ShadowMap::prefetch(store::Method method, std::span<const TileCoord> tiles) const {
+  for (TileCoord coord : tiles)
+    if (auto decoded = tile(method, coord); !decoded) return decoded.error();
+  return {};
+}
+
+std::optional<TileCoord> ShadowMap::tile_of(const Vec3& world) const {
+  LightSpacePoint light = frame_.to_light(world);
+  const double resolution = layout_.resolution();
+  if (!(light.u >= 0 && light.u < resolution && light.v >= 0 && light.v < resolution)) return std::nullopt;
+  return TileCoord{uint32_t(light.u) / layout_.tile_size(), uint32_t(light.v) / layout_.tile_size()};
 }
 
 Result<float> ShadowMap::texel_value(store::Method method, uint32_t u, uint32_t v, unsigned max_level) const {

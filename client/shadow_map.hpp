@@ -1,7 +1,8 @@
-// ShadowMap: answers "is this world point lit?" from a local store (DESIGN.md §3): world point ->
+// ShadowMap: answers "is this world point lit?" from a build (DESIGN.md §3): world point ->
 // light space (u, v, depth) -> tile -> decoded value; lit when depth <= value + bias.
-// Tiles are fetched from LMDB, checked (header, checksum) and decoded on demand and kept in an LRU
-// cache bounded in bytes. A tile that fails its checks is an error, never an answer.
+// Tiles are read from a TileSource (a local LMDB store, or a server over HTTP), checked (header,
+// checksum, method) and decoded on demand and kept in an LRU cache bounded in bytes. A tile that
+// fails its checks is an error, never an answer.
 // Points outside the map are lit and flagged; absent tiles of a complete build are empty (lit).
 // Thread safety: all methods may be called concurrently (the cache is locked; decoding runs
 // outside the lock).
@@ -15,8 +16,12 @@
 #include <mutex>
 #include <optional>
 
+#include <span>
+
 #include "client/decoded_tile.hpp"
+#include "client/lmdb_tile_source.hpp"
 #include "client/store_meta.hpp"
+#include "client/tile_source.hpp"
 #include "store/lmdb_store.hpp"
 #include "store/tile_key.hpp"
 
@@ -48,13 +53,17 @@ class ShadowMap {
   static Result<std::unique_ptr<ShadowMap>> open(const std::filesystem::path& store_dir) {
     return open(store_dir, Options{});
   }
+  // Opens the build `source` serves: reads and validates its meta and top trees now, tiles on demand.
+  // Errors: those of the source, corrupt_data, unsupported, invalid_input for an incomplete build.
+  static Result<std::unique_ptr<ShadowMap>> open(std::shared_ptr<const TileSource> source, Options options);
 
   const StoreMeta& meta() const { return meta_; }
   const LightFrame& frame() const { return frame_; }
   const TileLayout& layout() const { return layout_; }
-  // The open read-only store, for serving stored blobs unchanged (server/): one process must not
-  // open the same LMDB directory twice.
-  const store::Store& store() const { return *store_; }
+  const TileSource& source() const { return *source_; }
+  // The local store when the source is one (else nullptr), for serving or walking the stored blobs
+  // unchanged: one process must not open the same LMDB directory twice.
+  const store::Store* local_store() const { return local_ ? &local_->store() : nullptr; }
   // The first method of the build, used when a query names none.
   store::Method default_method() const { return meta_.methods.front(); }
 
@@ -62,6 +71,11 @@ class ShadowMap {
   Result<float> texel_value(store::Method method, uint32_t u, uint32_t v, unsigned max_level = 255) const;
   // Decoded tile, nullptr for an empty tile. Errors as texel_value.
   Result<std::shared_ptr<const DecodedTile>> tile(store::Method method, TileCoord tile) const;
+  // Loads `tiles` into the cache (ahead of queries, e.g. the tiles under a camera). Stops at the
+  // first error. Tiles beyond the cache's budget evict earlier ones, as any lookup would.
+  Status prefetch(store::Method method, std::span<const TileCoord> tiles) const;
+  // Light-space tile of a world point, nullopt when it falls off the map.
+  std::optional<TileCoord> tile_of(const Vec3& world) const;
   // Point query; `bias` in world units (default: the build's). `level`: level of detail counted from
   // the whole map's root (0) to the finest texels (log2 resolution, the default); coarser levels of
   // hierarchical methods stop the descent early (every level is a complete shadow map).
@@ -79,8 +93,14 @@ class ShadowMap {
   CacheStats cache_stats() const;
 
  private:
-  ShadowMap(std::unique_ptr<store::Store> store, StoreMeta meta, LightFrame frame, TileLayout layout, Options options)
-      : store_(std::move(store)), meta_(std::move(meta)), frame_(frame), layout_(layout), options_(options) {}
+  ShadowMap(std::shared_ptr<const TileSource> source, StoreMeta meta, LightFrame frame, TileLayout layout,
+            Options options)
+      : source_(std::move(source)),
+        local_(std::dynamic_pointer_cast<const LmdbTileSource>(source_)),
+        meta_(std::move(meta)),
+        frame_(frame),
+        layout_(layout),
+        options_(options) {}
 
   // Validates a query and maps the point to light space; the answer is flagged outside_map (lit)
   // when it falls off the map. Also returns the max level inside a tile tree for `level`.
@@ -93,7 +113,8 @@ class ShadowMap {
   // method's top tree; nullopt when the method has none (flat methods: the tile's value is used).
   std::optional<float> top_value(store::Method method, uint32_t u, uint32_t v, unsigned level) const;
 
-  std::unique_ptr<store::Store> store_;
+  std::shared_ptr<const TileSource> source_;
+  std::shared_ptr<const LmdbTileSource> local_;  // source_ when it is a local store
   std::map<store::Method, std::shared_ptr<const DecodedTile>> top_trees_;  // loaded at open
   StoreMeta meta_;
   LightFrame frame_;

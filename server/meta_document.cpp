@@ -7,6 +7,10 @@ namespace {
 nlohmann::json vec(const Vec3& v) { return nlohmann::json::array({v[0], v[1], v[2]}); }
 }  // namespace
 
+std::string tiles_url_template(const std::string& build_id) {
+  return "/v1/builds/" + build_id + "/tiles/{method}/{z}/{x}/{y}";
+}
+
 nlohmann::json meta_document(const ShadowMap& map) {
   const StoreMeta& meta = map.meta();
   const LightFrame& frame = map.frame();
@@ -15,7 +19,8 @@ nlohmann::json meta_document(const ShadowMap& map) {
   nlohmann::json tiles_by_method = nlohmann::json::object();
   for (store::Method m : meta.methods) {
     methods.push_back(store::method_name(m));
-    tiles_by_method[store::method_name(m)] = std::string("/v1/tiles/") + store::method_name(m) + "/{z}/{x}/{y}";
+    tiles_by_method[store::method_name(m)] =
+        "/v1/builds/" + meta.config_hash + "/tiles/" + store::method_name(m) + "/{z}/{x}/{y}";
   }
   const double r = layout.resolution();
   std::string name = std::filesystem::path(meta.scene_path).filename().string();
@@ -24,7 +29,7 @@ nlohmann::json meta_document(const ShadowMap& map) {
       {"name", name},
       {"version", "1.0.0"},
       {"scheme", "xyz"},
-      {"tiles", nlohmann::json::array({kTilesUrlTemplate})},
+      {"tiles", nlohmann::json::array({tiles_url_template(meta.config_hash)})},
       {"minzoom", layout.tile_level()},
       {"maxzoom", layout.tile_level()},
       {"bounds", nlohmann::json::array({0.0, 0.0, r, r})},
@@ -32,6 +37,8 @@ nlohmann::json meta_document(const ShadowMap& map) {
        {{"format_version", meta.format_version},
         {"builder_version", meta.builder_version},
         {"build_id", meta.config_hash},
+        {"build_record", "/v1/build"},
+        {"skiplist", "/v1/builds/" + meta.config_hash + "/skiplist?method={method}"},
         {"scene", {{"name", name}, {"triangles", meta.scene_triangles}}},
         {"world_bounds", {{"min", vec(meta.scene_bounds.min)}, {"max", vec(meta.scene_bounds.max)}}},
         {"light_bounds", {{"u", {0.0, r}}, {"v", {0.0, r}}, {"depth", {0.0, 1.0}}}},

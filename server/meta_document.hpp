@@ -8,13 +8,16 @@
 // Thread safety: pure function of an open ShadowMap.
 #pragma once
 
+#include <string>
+
 #include <nlohmann/json.hpp>
 
 #include "client/shadow_map.hpp"
 
 namespace shadowtiles::server {
 
-inline constexpr const char* kTilesUrlTemplate = "/v1/tiles/{method}/{z}/{x}/{y}";
+// Tile URL template of a build: under the build id, so caches may keep tiles for good.
+std::string tiles_url_template(const std::string& build_id);
 
 nlohmann::json meta_document(const ShadowMap& map);
 

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include "server/http_response.hpp"
+#include "client/store_meta.hpp"
 #include "server/request_parsing.hpp"
 #include "store/blob.hpp"
 #include "store/tile_key.hpp"
@@ -16,17 +17,31 @@ std::string_view trim(std::string_view s) {
   return s;
 }
 
-std::string cache_control(const ServiceState& state) {
-  return "public, max-age=" + std::to_string(state.config.cache_control_max_age) + ", immutable";
+// URLs carrying the build id never change meaning: cache them for good. Unversioned URLs name
+// whatever build is served now, so caches must revalidate (the ETag makes that a cheap 304).
+std::string cache_control(const ServiceState& state, bool versioned) {
+  return versioned ? "public, max-age=" + std::to_string(state.config.cache_control_max_age) + ", immutable"
+                   : "public, no-cache";
 }
 
-// Sends the blob under `key` of `db`, or calls on_absent. `what` names it in errors and logs.
+// A /v1/builds/{id}/... URL names the served build, or it is 404 (an older build after a swap).
+bool check_build_id(const ShadowMap& map, const std::string& id, httplib::Response& res) {
+  if (id == map.meta().config_hash) return true;
+  send_error(res, 404, "not_found",
+             "build '" + id + "' is not served here (the current build is '" + map.meta().config_hash +
+                 "': see /v1/meta)");
+  return false;
+}
+
+// Sends the blob under `key` of `db` from `map`'s store, or calls on_absent. `what` names it in
+// errors and logs.
 template <class OnAbsent>
-void serve_blob(ServiceState& state, const httplib::Request& req, httplib::Response& res, store::Database db,
-                std::span<const uint8_t> key, std::optional<store::Method> expected_method, const std::string& what,
-                OnAbsent on_absent) {
-  const store::Store& store = state.map()->store();
-  auto snapshot = store.snapshot();
+void serve_blob(ServiceState& state, const ShadowMap& map, bool versioned, const httplib::Request& req,
+                httplib::Response& res, store::Database db, std::span<const uint8_t> key,
+                std::optional<store::Method> expected_method, const std::string& what, OnAbsent on_absent) {
+  const store::Store* store = map.local_store();
+  if (!store) return send_error(res, 500, "internal", "the served build has no local store");
+  auto snapshot = store->snapshot();
   if (!snapshot) {
     spdlog::error("{}: cannot read the store: {}", what, snapshot.error().message);
     return send_error(res, http_error_for(snapshot.error()));
@@ -47,7 +62,7 @@ void serve_blob(ServiceState& state, const httplib::Request& req, httplib::Respo
   }
   const std::string etag = "\"" + store::checksum_hex(header->checksum) + "\"";
   res.set_header("ETag", etag);
-  res.set_header("Cache-Control", cache_control(state));
+  res.set_header("Cache-Control", cache_control(state, versioned));
   if (req.has_header("If-None-Match") && if_none_match_matches(req.get_header_value("If-None-Match"), etag)) {
     res.status = 304;
     return;
@@ -56,15 +71,19 @@ void serve_blob(ServiceState& state, const httplib::Request& req, httplib::Respo
   res.set_content(reinterpret_cast<const char*>((*view)->data()), (*view)->size(), "application/octet-stream");
 }
 
-void get_tile(ServiceState& state, const httplib::Request& req, httplib::Response& res) {
-  if (!state.map()) return send_error(res, 503, "not_ready", "the store is not open yet");
-  const ShadowMap& map = *state.map();
-  auto method = store::parse_method(req.matches[1].str());
+// Tile URL captures start at `first` (after the build id, when the URL has one).
+void get_tile(ServiceState& state, const httplib::Request& req, httplib::Response& res, bool versioned) {
+  auto held = state.map();  // this request's build, even if a reload publishes another
+  if (!held) return send_error(res, 503, "not_ready", "the store is not open yet");
+  const ShadowMap& map = *held;
+  const size_t first = versioned ? 2 : 1;
+  if (versioned && !check_build_id(map, req.matches[1].str(), res)) return;
+  auto method = store::parse_method(req.matches[first].str());
   if (!method) return send_error(res, 400, "invalid_input", "unknown method in the tile URL");
   uint64_t coords[3];
   static constexpr const char* kNames[3] = {"level", "x", "y"};
-  for (int i = 0; i < 3; ++i) {
-    auto value = parse_unsigned(req.matches[i + 2].str(), kNames[i], UINT32_MAX);
+  for (size_t i = 0; i < 3; ++i) {
+    auto value = parse_unsigned(req.matches[first + 1 + i].str(), kNames[i], UINT32_MAX);
     if (!value) return send_error(res, 400, "invalid_input", "tile URL: " + value.error().message);
     coords[i] = *value;
   }
@@ -81,16 +100,18 @@ void get_tile(ServiceState& state, const httplib::Request& req, httplib::Respons
   auto key = store::encode_tile_key({*method, layout.tile_level(), coord.x, coord.y});
   std::string what = std::string("tile ") + store::method_name(*method) + "/" + std::to_string(coords[0]) + "/" +
                      std::to_string(coord.x) + "/" + std::to_string(coord.y);
-  serve_blob(state, req, res, store::Database::tiles, key, *method, what, [&] {
+  serve_blob(state, map, versioned, req, res, store::Database::tiles, key, *method, what, [&] {
     // In bounds, nothing stored: an empty tile (no geometry), lit everywhere.
     res.status = 204;
-    res.set_header("Cache-Control", cache_control(state));
+    res.set_header("Cache-Control", cache_control(state, versioned));
   });
 }
 
-void get_skiplist(ServiceState& state, const httplib::Request& req, httplib::Response& res) {
-  if (!state.map()) return send_error(res, 503, "not_ready", "the store is not open yet");
-  const ShadowMap& map = *state.map();
+void get_skiplist(ServiceState& state, const httplib::Request& req, httplib::Response& res, bool versioned) {
+  auto held = state.map();
+  if (!held) return send_error(res, 503, "not_ready", "the store is not open yet");
+  const ShadowMap& map = *held;
+  if (versioned && !check_build_id(map, req.matches[1].str(), res)) return;
   auto options = options_from_params(req.params, 1);
   if (!options) return send_error(res, http_error_for(options.error()));
   if (options->pcf || options->level || options->bias)
@@ -98,12 +119,39 @@ void get_skiplist(ServiceState& state, const httplib::Request& req, httplib::Res
   store::Method method = options->method.value_or(map.default_method());
   if (!map.meta().has_method(method))
     return send_error(res, 404, "not_found", std::string("method '") + store::method_name(method) + "' is not in this store");
-  std::string key = std::string("skiplist/") + store::method_name(method);
-  serve_blob(state, req, res, store::Database::top, store::as_bytes(key), std::nullopt,
+  // The method's top tree: the tiles' root intervals with the skip list embedded.
+  std::string key = top_tree_key(method);
+  serve_blob(state, map, versioned, req, res, store::Database::top, store::as_bytes(key), method,
              std::string("skip list ") + store::method_name(method), [&] {
                send_error(res, 404, "not_found",
-                          std::string("no skip list stored for method '") + store::method_name(method) + "'");
+                          std::string("no skip list stored for method '") + store::method_name(method) +
+                              "' (flat methods have none)");
              });
+}
+
+// The build's meta record exactly as stored: what a streaming client needs to map points to tiles.
+void get_build(ServiceState& state, const httplib::Request& req, httplib::Response& res) {
+  auto held = state.map();
+  if (!held) return send_error(res, 503, "not_ready", "the store is not open yet");
+  auto text = held->source().meta_text();
+  if (!text) {
+    spdlog::error("/v1/build: cannot read the store: {}", text.error().message);
+    return send_error(res, http_error_for(text.error()));
+  }
+  auto parsed = StoreMeta::parse(*text);
+  if (!parsed || parsed->config_hash != held->meta().config_hash) {
+    // The directory's record no longer matches the build being served (a reload is pending).
+    return send_error(res, 503, "not_ready", "the store's build record changed; retry after the reload");
+  }
+  const std::string etag = "\"" + held->meta().config_hash + "\"";
+  res.set_header("ETag", etag);
+  res.set_header("Cache-Control", cache_control(state, false));
+  if (req.has_header("If-None-Match") && if_none_match_matches(req.get_header_value("If-None-Match"), etag)) {
+    res.status = 304;
+    return;
+  }
+  res.status = 200;
+  res.set_content(*text, "application/json");
 }
 
 }  // namespace
@@ -122,8 +170,14 @@ bool if_none_match_matches(std::string_view header, std::string_view etag) {
 
 void register_blob_routes(httplib::Server& http, ServiceState& state) {
   http.Get(R"(/v1/tiles/([^/]+)/([^/]+)/([^/]+)/([^/]+))",
-           [&state](const httplib::Request& req, httplib::Response& res) { get_tile(state, req, res); });
-  http.Get("/v1/skiplist", [&state](const httplib::Request& req, httplib::Response& res) { get_skiplist(state, req, res); });
+           [&state](const httplib::Request& req, httplib::Response& res) { get_tile(state, req, res, false); });
+  http.Get(R"(/v1/builds/([^/]+)/tiles/([^/]+)/([^/]+)/([^/]+)/([^/]+))",
+           [&state](const httplib::Request& req, httplib::Response& res) { get_tile(state, req, res, true); });
+  http.Get("/v1/skiplist",
+           [&state](const httplib::Request& req, httplib::Response& res) { get_skiplist(state, req, res, false); });
+  http.Get(R"(/v1/builds/([^/]+)/skiplist)",
+           [&state](const httplib::Request& req, httplib::Response& res) { get_skiplist(state, req, res, true); });
+  http.Get("/v1/build", [&state](const httplib::Request& req, httplib::Response& res) { get_build(state, req, res); });
 }
 
 }  // namespace shadowtiles::server

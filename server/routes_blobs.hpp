@@ -1,10 +1,15 @@
-// Routes serving stored blobs unchanged (DESIGN.md §9, §10):
+// Routes serving stored records unchanged (DESIGN.md §9, §10):
 //   GET|HEAD /v1/tiles/{method}/{level}/{x}/{y}   a tile blob of the `tiles` database
-//   GET|HEAD /v1/skiplist[?method=]               the skip list blob, `top` key "skiplist/<method>"
+//   GET|HEAD /v1/skiplist[?method=]               the method's top tree (tile roots + embedded skip
+//                                                 list), `top` key "top/<method>"
+//   GET|HEAD /v1/builds/{build}/tiles/... and /v1/builds/{build}/skiplist: the same, under the build
+//            id (meta `config_hash`); 404 for any other build, so these URLs are immutable
+//   GET|HEAD /v1/build                            the build's meta record (JSON) as stored; ETag = build id
 // Every blob is checked (store::check_blob: magic, version, sizes, checksum) before it is served; a
 // blob failing its checks is never sent: 500 with a JSON error, a log line and a metric (the one
 // 5xx the server gives, since the fault is the store's). The strong ETag is the blob checksum
-// ("<16 hex digits>"), so If-None-Match → 304; Cache-Control: public, max-age=N, immutable.
+// ("<16 hex digits>"), so If-None-Match → 304. Cache-Control: "public, max-age=N, immutable" under
+// /v1/builds/{build}/, "public, no-cache" (revalidate: a reload may change them) on unversioned URLs.
 // Tiles: 204 for an in-bounds tile with no blob (empty: all lit), 404 for a level other than the
 // store's tile level, x/y outside the grid or a method not in the store, 400 for a malformed URL
 // (non-numeric coordinates, unknown method name). Skip list: 404 until one is stored.

@@ -7,7 +7,7 @@ namespace shadowtiles::server {
 
 void register_info_routes(httplib::Server& http, ServiceState& state) {
   http.Get("/v1/meta", [&state](const httplib::Request&, httplib::Response& res) {
-    const ShadowMap* map = state.map();
+    auto map = state.map();
     if (!map) return send_error(res, 503, "not_ready", "the store is not open yet");
     send_json(res, 200, meta_document(*map));
     // The document changes only with the store; a short max-age lets clients skip refetching it.
@@ -20,7 +20,7 @@ void register_info_routes(httplib::Server& http, ServiceState& state) {
     res.set_header("Cache-Control", "no-store");
   });
   http.Get("/metrics", [&state](const httplib::Request&, httplib::Response& res) {
-    const ShadowMap* map = state.map();
+    auto map = state.map();
     std::optional<CacheStats> cache;
     if (map) cache = map->cache_stats();
     res.status = 200;

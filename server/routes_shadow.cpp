@@ -22,7 +22,8 @@ bool require_map(const ServiceState& state, httplib::Response& res) {
 
 void get_shadow(ServiceState& state, const httplib::Request& req, httplib::Response& res) {
   if (!require_map(state, res)) return;
-  const ShadowMap& map = *state.map();
+  auto held = state.map();  // this request's build, even if a reload publishes another
+  const ShadowMap& map = *held;
   static constexpr std::string_view kPointParams[] = {"x", "y", "z"};
   auto options = options_from_params(req.params, state.config.max_pcf, kPointParams);
   if (!options) return send_error(res, http_error_for(options.error()));

@@ -2,7 +2,11 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
 #include <optional>
+#include <system_error>
+#include <thread>
 
 #include <httplib.h>
 #include <spdlog/spdlog.h>
@@ -14,6 +18,7 @@
 #include "server/routes_info.hpp"
 #include "server/routes_shadow.hpp"
 #include "server/service_state.hpp"
+#include "store/serving_lock.hpp"
 
 namespace shadowtiles::server {
 namespace {
@@ -40,16 +45,92 @@ const char* status_code_name(int status) {
 
 }  // namespace
 
+// A served build: the map and the shared serving lock that keeps builders out of its directory.
+// Published as a shared_ptr<const ShadowMap> aliasing this, so the lock lives exactly as long as
+// some request still reads the build.
+struct ServedBuild {
+  store::ServingLock lock;
+  std::unique_ptr<ShadowMap> map;
+  std::filesystem::path dir;  // canonical
+};
+
 struct Server::Impl {
   explicit Impl(const ServerConfig& config) : state(config) {}
   ServiceState state;
   httplib::Server http;
   int port = 0;
   std::atomic<bool> stop_requested{false};
+
+  // Reloads (attach_store, reload, the poller) are serialised by reload_mutex.
+  std::mutex reload_mutex;
+  std::filesystem::path store_path;   // as given: may be a symlink a deployment repoints
+  std::filesystem::path served_dir;   // canonical directory of the published build
+  std::weak_ptr<const ShadowMap> previous;  // the build replaced last, while requests still hold it
+
+  std::mutex poll_mutex;
+  std::condition_variable poll_wake;
+  bool poll_stop = false;
+  std::thread poller;
+
+  Result<std::shared_ptr<const ShadowMap>> open_build(const std::filesystem::path& dir) const;
+  Result<bool> reload_locked();
 };
 
 Server::Server(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-Server::~Server() = default;
+
+Server::~Server() {
+  {
+    std::lock_guard lock(impl_->poll_mutex);
+    impl_->poll_stop = true;
+  }
+  impl_->poll_wake.notify_all();
+  if (impl_->poller.joinable()) impl_->poller.join();
+}
+
+Result<std::shared_ptr<const ShadowMap>> Server::Impl::open_build(const std::filesystem::path& dir) const {
+  auto lock = store::ServingLock::acquire(dir, store::ServingLock::Kind::serve);
+  if (!lock) return lock.error();
+  ShadowMap::Options options;
+  options.cache_bytes = size_t(state.config.cache_bytes);
+  auto map = ShadowMap::open(dir, options);
+  if (!map) return map.error();
+  auto served = std::make_shared<ServedBuild>(ServedBuild{std::move(*lock), std::move(*map), dir});
+  const ShadowMap* raw = served->map.get();
+  return std::shared_ptr<const ShadowMap>(std::move(served), raw);
+}
+
+// True when a new build was published. The store path is resolved again each time, so repointing
+// a symlink (ln -sfn new current) swaps builds; the same directory with a new build record (it
+// cannot change while we hold the serving lock, unless a writer ignores it) is reopened too.
+Result<bool> Server::Impl::reload_locked() {
+  if (store_path.empty()) return make_error(ErrorCode::invalid_input, "no store path to reload from");
+  std::error_code ec;
+  std::filesystem::path dir = std::filesystem::canonical(store_path, ec);
+  if (ec) return make_error(ErrorCode::not_found, "cannot resolve " + store_path.string() + ": " + ec.message());
+  auto current = state.map();
+  if (current && dir == served_dir) {
+    auto text = current->source().meta_text();
+    if (!text) return text.error();
+    auto meta = StoreMeta::parse(*text);
+    if (!meta) return meta.error();
+    if (meta->config_hash == current->meta().config_hash) return false;
+    return make_error(ErrorCode::invalid_input,
+                      dir.string() + " was rewritten in place while served; serving the old snapshot until restart");
+  }
+  // One LMDB environment per directory and process: a directory still open for draining requests
+  // (swapped away from a moment ago) cannot be opened again yet.
+  if (auto draining = previous.lock(); draining && current && draining != current) {
+    if (const store::Store* st = draining->local_store(); st && std::filesystem::equivalent(st->path(), dir, ec))
+      return make_error(ErrorCode::invalid_input, dir.string() + " is still draining its previous requests; retry");
+  }
+  auto opened = open_build(dir);
+  if (!opened) return opened.error();
+  previous = current;
+  state.publish(std::move(*opened));
+  served_dir = dir;
+  spdlog::info("serving build {} from {}", state.map()->meta().config_hash, dir.string());
+  return true;
+}
 
 Result<std::unique_ptr<Server>> Server::bind(const ServerConfig& config) {
   if (Status s = config.validate(); !s) return s.error();
@@ -131,18 +212,48 @@ int Server::port() const { return impl_->port; }
 const ServerConfig& Server::config() const { return impl_->state.config; }
 
 Status Server::attach_store(const std::filesystem::path& store_dir) {
-  if (impl_->state.map()) return make_error(ErrorCode::invalid_input, "a store is already attached");
-  ShadowMap::Options options;
-  options.cache_bytes = size_t(impl_->state.config.cache_bytes);
-  auto map = ShadowMap::open(store_dir, options);
-  if (!map) return map.error();
-  return attach(std::move(*map));
+  std::lock_guard lock(impl_->reload_mutex);
+  if (impl_->state.map() || !impl_->store_path.empty())
+    return make_error(ErrorCode::invalid_input, "a store is already attached");
+  impl_->store_path = store_dir;
+  auto loaded = impl_->reload_locked();
+  if (impl_->state.config.reload_poll_s > 0) {
+    // Polls even when the first open failed (a build still being written): it is served once done.
+    impl_->poller = std::thread([impl = impl_.get()] {
+      std::unique_lock lock(impl->poll_mutex);
+      while (!impl->poll_wake.wait_for(lock, std::chrono::seconds(impl->state.config.reload_poll_s),
+                                       [impl] { return impl->poll_stop; })) {
+        lock.unlock();
+        {
+          std::lock_guard reload_lock(impl->reload_mutex);
+          auto reloaded = impl->reload_locked();
+          if (!reloaded) spdlog::debug("reload check: {}", reloaded.error().message);
+        }
+        lock.lock();
+      }
+    });
+  }
+  if (!loaded) return loaded.error();
+  return {};
+}
+
+Result<bool> Server::reload() {
+  std::lock_guard lock(impl_->reload_mutex);
+  return impl_->reload_locked();
 }
 
 Status Server::attach(std::unique_ptr<ShadowMap> map) {
   if (!map) return make_error(ErrorCode::invalid_input, "no store to attach");
-  if (!impl_->state.attach(std::move(map))) return make_error(ErrorCode::invalid_input, "a store is already attached");
+  std::lock_guard lock(impl_->reload_mutex);
+  if (impl_->state.map() || !impl_->store_path.empty())
+    return make_error(ErrorCode::invalid_input, "a store is already attached");
+  impl_->state.publish(std::shared_ptr<const ShadowMap>(std::move(map)));
   return {};
+}
+
+std::string Server::build_id() const {
+  auto map = impl_->state.map();
+  return map ? map->meta().config_hash : std::string();
 }
 
 Status Server::run() {

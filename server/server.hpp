@@ -6,6 +6,14 @@
 // `threads` workers until stop(), then finishes every accepted connection (in-flight requests
 // drain) and returns. The store can be attached while run() is already serving.
 //
+// Swapping builds (DESIGN.md §9): the server holds a shared serving lock on the directory it serves
+// (store/serving_lock.hpp), so `shadowtiles build` refuses to rewrite it; a new build goes into a
+// new directory. reload() — called on SIGHUP and every `reload_poll_s` seconds — resolves the store
+// path again (a symlink repointed with `ln -sfn`), opens and validates the new build, then publishes
+// it atomically: requests in flight finish on the old build, which closes when the last one ends.
+// A path that does not hold a complete build yet (missing, incomplete, being written) keeps the
+// current build served, or 503 until the first one opens.
+//
 // Errors: bind → invalid_input (bad config), io_error (address cannot be bound); attach_store →
 // ShadowMap::open's errors; run → io_error if the listener fails.
 // Thread safety: stop() and port() may be called from any thread at any time (not from a signal
@@ -17,6 +25,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <string>
 
 #include "server/server_config.hpp"
 #include "store/result.hpp"
@@ -38,9 +47,16 @@ class Server {
   int port() const;
   const ServerConfig& config() const;
 
-  // Errors: ShadowMap::open's; invalid_input when a store is already attached.
+  // Errors: ShadowMap::open's; invalid_input when a store is already attached or being written.
+  // With reload_poll_s > 0 the path keeps being polled even when this first open fails.
   Status attach_store(const std::filesystem::path& store_dir);
+  // Serves an already open map (tests); no reloads.
   Status attach(std::unique_ptr<ShadowMap> map);
+  // Checks the store path for a new build and swaps to it; true when it swapped. Errors leave the
+  // current build served (e.g. the new one is incomplete).
+  Result<bool> reload();
+  // The served build's id (meta config_hash), empty before one is open.
+  std::string build_id() const;
 
   // Blocks until stop(); returns at once if stop() was already called.
   Status run();

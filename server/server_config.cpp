@@ -47,6 +47,7 @@ Status ServerConfig::validate() const {
   if (keep_alive_max_count < 1) return bad("keep_alive_max_count", "must be at least 1");
   if (keep_alive_timeout_s < 1 || keep_alive_timeout_s > 3600)
     return bad("keep_alive_timeout_s", "must be in [1, 3600]");
+  if (reload_poll_s > 86400) return bad("reload_poll_s", "must be in [0, 86400] (0: reload on SIGHUP only)");
   return {};
 }
 
@@ -64,7 +65,8 @@ nlohmann::json ServerConfig::to_json() const {
           {"write_timeout_s", write_timeout_s},
           {"max_connections", max_connections},
           {"keep_alive_max_count", keep_alive_max_count},
-          {"keep_alive_timeout_s", keep_alive_timeout_s}};
+          {"keep_alive_timeout_s", keep_alive_timeout_s},
+          {"reload_poll_s", reload_poll_s}};
 }
 
 Result<ServerConfig> ServerConfig::from_json(const nlohmann::json& json, ServerConfig config) {
@@ -104,6 +106,7 @@ Result<ServerConfig> ServerConfig::from_json(const nlohmann::json& json, ServerC
        [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.keep_alive_max_count); }},
       {"keep_alive_timeout_s",
        [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.keep_alive_timeout_s); }},
+      {"reload_poll_s", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.reload_poll_s); }},
   };
   for (const auto& [key, value] : json.items()) {
     if (key.starts_with("_")) continue;  // "_comment" and friends: documentation inside the file

@@ -35,6 +35,7 @@ struct ServerConfig {
   unsigned max_connections = 64;         // connections served or waiting; beyond: 503 and close
   unsigned keep_alive_max_count = 100;   // requests per keep-alive connection
   unsigned keep_alive_timeout_s = 5;     // idle keep-alive connection closed after this
+  unsigned reload_poll_s = 5;            // check the store path for a new build this often; 0: only on SIGHUP
 
   // Range checks shared by the file parser and CLI overrides.
   Status validate() const;

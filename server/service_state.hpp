@@ -1,9 +1,11 @@
 // ServiceState: what every route handler shares: the effective config, CORS policy, metrics, the
-// batch pool and the open store. The store is attached once, after the server may already be
-// listening: until then map() is null and the API answers 503 (DESIGN.md §10, /healthz).
-// Thread safety: config/cors are immutable; metrics and pool are thread-safe; attach() publishes
-// the map with release ordering and map() reads it with acquire, so a handler that sees the map
-// sees it fully constructed. attach() succeeds once; call it from one thread.
+// batch pool and the build being served. The build is published after the server may already be
+// listening: until then map() is null and the API answers 503 (DESIGN.md §10, /healthz). A reload
+// publishes a new build (DESIGN.md §9 "swapping to a new build"): a handler takes map() once and
+// keeps that shared_ptr for the whole request, so requests in flight finish on the build they
+// started with, which is closed when the last of them drops it.
+// Thread safety: config/cors are immutable; metrics and pool are thread-safe; map()/publish() are
+// atomic (acquire/release), so a handler that sees a map sees it fully constructed.
 #pragma once
 
 #include <atomic>
@@ -20,15 +22,8 @@ namespace shadowtiles::server {
 struct ServiceState {
   explicit ServiceState(ServerConfig c) : config(std::move(c)), cors(config.cors_origins), pool(config.threads) {}
 
-  const ShadowMap* map() const { return map_.load(std::memory_order_acquire); }
-  // False (and `map` dropped) when a map is already attached: replacing it under running handlers
-  // would free what they read.
-  bool attach(std::unique_ptr<ShadowMap> map) {
-    if (owned_) return false;
-    owned_ = std::move(map);
-    map_.store(owned_.get(), std::memory_order_release);
-    return true;
-  }
+  std::shared_ptr<const ShadowMap> map() const { return map_.load(std::memory_order_acquire); }
+  void publish(std::shared_ptr<const ShadowMap> map) { map_.store(std::move(map), std::memory_order_release); }
 
   const ServerConfig config;
   const CorsPolicy cors;
@@ -36,8 +31,7 @@ struct ServiceState {
   BatchPool pool;
 
  private:
-  std::unique_ptr<ShadowMap> owned_;
-  std::atomic<const ShadowMap*> map_{nullptr};
+  std::atomic<std::shared_ptr<const ShadowMap>> map_;
 };
 
 }  // namespace shadowtiles::server

@@ -1,4 +1,5 @@
-// ShutdownSignals: turns SIGTERM / SIGINT into a clean stop (DESIGN.md §10: drain, exit 0).
+// ShutdownSignals: turns SIGTERM / SIGINT into a clean stop (DESIGN.md §10: drain, exit 0), and
+// SIGHUP into a reload (DESIGN.md §9: swap to a new build) when `on_reload` is given.
 // Construct it before any other thread starts: it blocks both signals in the calling thread, so
 // every thread created afterwards inherits the mask, and one watcher thread receives them with
 // sigtimedwait and calls `on_signal` (from that ordinary thread, so on_signal may lock, log and call
@@ -17,7 +18,7 @@ namespace shadowtiles::server {
 
 class ShutdownSignals {
  public:
-  explicit ShutdownSignals(std::function<void(int signal)> on_signal);
+  explicit ShutdownSignals(std::function<void(int signal)> on_signal, std::function<void()> on_reload = {});
   ~ShutdownSignals();
   ShutdownSignals(const ShutdownSignals&) = delete;
   ShutdownSignals& operator=(const ShutdownSignals&) = delete;
@@ -26,6 +27,7 @@ class ShutdownSignals {
 
  private:
   std::function<void(int)> on_signal_;
+  std::function<void()> on_reload_;
   sigset_t previous_{};
   std::atomic<bool> done_{false};
   std::atomic<int> received_{0};

@@ -22,10 +22,12 @@
 #include "builder/receiver_sampler.hpp"
 #include "builder/scene_loader.hpp"
 #include "client/shadow_map.hpp"
+#include "client/store_meta.hpp"
 #include "server/routes_blobs.hpp"
 #include "server/server.hpp"
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
+#include "store/serving_lock.hpp"
 #include "store/tile_key.hpp"
 #include "tests/testing_support.hpp"
 
@@ -194,7 +196,7 @@ TEST_F(ServerTest, MetaIsTileJsonWithTheShadowFrame) {
   auto meta = json::parse(res->body);
   EXPECT_EQ(meta["tilejson"], "3.0.0");
   EXPECT_EQ(meta["scheme"], "xyz");
-  EXPECT_EQ(meta["tiles"][0], "/v1/tiles/{method}/{z}/{x}/{y}");
+  EXPECT_EQ(meta["tiles"][0], "/v1/builds/" + reference_->meta().config_hash + "/tiles/{method}/{z}/{x}/{y}");
   EXPECT_EQ(meta["minzoom"], 2);
   EXPECT_EQ(meta["maxzoom"], 2);
   EXPECT_EQ(meta["bounds"], json({0.0, 0.0, 512.0, 512.0}));
@@ -334,7 +336,7 @@ TEST_F(ServerTest, TilesAreTheStoredBlobsWithEtagsAnd304) {
                           std::to_string(y);
         auto res = cli.Get(url);
         ASSERT_TRUE(res);
-        auto stored = reference_->store().get(store::Database::tiles, store::encode_tile_key({method, 2, x, y}));
+        auto stored = reference_->local_store()->get(store::Database::tiles, store::encode_tile_key({method, 2, x, y}));
         ASSERT_TRUE(stored.ok());
         if (!stored->has_value()) {
           EXPECT_EQ(res->status, 204) << url;
@@ -349,8 +351,17 @@ TEST_F(ServerTest, TilesAreTheStoredBlobsWithEtagsAnd304) {
         ASSERT_TRUE(header.ok());
         std::string etag = strong_etag(header->checksum);
         EXPECT_EQ(res->get_header_value("ETag"), etag);
-        EXPECT_EQ(res->get_header_value("Cache-Control"), "public, max-age=86400, immutable");
+        EXPECT_EQ(res->get_header_value("Cache-Control"), "public, no-cache") << "unversioned URLs revalidate";
         EXPECT_EQ(res->get_header_value("Content-Type"), "application/octet-stream");
+        // Under the build id the same bytes are immutable; another build id is not served.
+        const std::string versioned = "/v1/builds/" + reference_->meta().config_hash + url.substr(3);
+        auto pinned = cli.Get(versioned);
+        ASSERT_TRUE(pinned);
+        ASSERT_EQ(pinned->status, 200) << versioned;
+        EXPECT_EQ(pinned->body, res->body);
+        EXPECT_EQ(pinned->get_header_value("ETag"), etag);
+        EXPECT_EQ(pinned->get_header_value("Cache-Control"), "public, max-age=86400, immutable");
+        expect_json_error(cli.Get("/v1/builds/0123456789abcdef" + url.substr(3)), 404, "another build id");
 
         auto again = cli.Get(url, {{"If-None-Match", etag}});
         ASSERT_TRUE(again);
@@ -380,14 +391,44 @@ TEST_F(ServerTest, TilesAreTheStoredBlobsWithEtagsAnd304) {
   EXPECT_FALSE(server::if_none_match_matches("ab", "\"ab\""));
 }
 
-TEST_F(ServerTest, SkipListIs404UntilStored) {
+// The skip list of a hierarchical method is its stored top tree, bytes unchanged; flat methods
+// have none.
+TEST_F(ServerTest, SkipListIsTheStoredTopTree) {
   auto cli = server_->client();
-  auto res = cli.Get("/v1/skiplist");
-  expect_json_error(res, 404, "skiplist");
+  auto res = cli.Get("/v1/skiplist");  // the default method, raw: flat
+  expect_json_error(res, 404, "skiplist raw");
   EXPECT_NE(res->body.find("no skip list stored for method"), std::string::npos);
-  expect_json_error(cli.Get("/v1/skiplist?method=mh"), 404, "skiplist mh");
+  for (const char* name : {"mh", "mmh"}) {
+    auto method = *store::parse_method(name);
+    auto stored = reference_->local_store()->get(store::Database::top, store::as_bytes(top_tree_key(method)));
+    ASSERT_TRUE(stored.ok() && stored->has_value()) << name;
+    auto served = cli.Get(std::string("/v1/skiplist?method=") + name);
+    ASSERT_TRUE(served);
+    ASSERT_EQ(served->status, 200) << name;
+    EXPECT_EQ(served->body, std::string((*stored)->begin(), (*stored)->end())) << name;
+    auto pinned = cli.Get("/v1/builds/" + reference_->meta().config_hash + "/skiplist?method=" + name);
+    ASSERT_TRUE(pinned);
+    EXPECT_EQ(pinned->status, 200);
+    EXPECT_EQ(pinned->body, served->body);
+  }
   expect_json_error(cli.Get("/v1/skiplist?method=bogus"), 400, "skiplist bogus");
   expect_json_error(cli.Get("/v1/skiplist?method=dagmh"), 404, "skiplist absent method");
+}
+
+// The build record a streaming client starts from: the meta JSON as stored, ETag = build id.
+TEST_F(ServerTest, BuildRecordIsTheStoredMeta) {
+  auto cli = server_->client();
+  auto res = cli.Get("/v1/build");
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200);
+  auto stored = reference_->source().meta_text();
+  ASSERT_TRUE(stored.ok());
+  EXPECT_EQ(res->body, *stored);
+  const std::string etag = "\"" + reference_->meta().config_hash + "\"";
+  EXPECT_EQ(res->get_header_value("ETag"), etag);
+  auto again = cli.Get("/v1/build", {{"If-None-Match", etag}});
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->status, 304);
 }
 
 TEST_F(ServerTest, Cors) {
@@ -577,7 +618,7 @@ TEST_F(ServerTest, EightConcurrentClients) {
           case 2: {
             uint32_t x = random() % 4, y = random() % 4;
             auto res = cli.Get("/v1/tiles/" + name + "/2/" + std::to_string(x) + "/" + std::to_string(y));
-            auto stored = reference_->store().get(store::Database::tiles, store::encode_tile_key({method, 2, x, y}));
+            auto stored = reference_->local_store()->get(store::Database::tiles, store::encode_tile_key({method, 2, x, y}));
             bool ok = res && (stored->has_value()
                                   ? res->status == 200 && res->body == std::string((*stored)->begin(), (*stored)->end())
                                   : res->status == 204);
@@ -625,12 +666,12 @@ TEST_F(ServerTest, EightConcurrentClients) {
   EXPECT_EQ(failures.load(), 0) << all;
 }
 
-// A store whose tile (1, 1) fails its checksum and which holds a valid skip list blob.
+// A store (raw + mh) whose raw tile (1, 1) fails its checksum; its mh skip list is intact.
 class DamagedStoreTest : public ::testing::Test {
  protected:
   void SetUp() override {
     store_ = dir_.path() / "damaged.store";
-    auto built = run_build(bunny_config(store_, {store::Method::raw}));
+    auto built = run_build(bunny_config(store_, {store::Method::raw, store::Method::mh}));
     ASSERT_TRUE(built.ok()) << built.error().message;
     auto store = store::Store::open(store_, {store::Store::Mode::read_write});
     ASSERT_TRUE(store.ok());
@@ -639,11 +680,10 @@ class DamagedStoreTest : public ::testing::Test {
     ASSERT_TRUE(blob.ok() && blob->has_value());
     std::vector<uint8_t> bytes = **blob;
     bytes[bytes.size() / 2] ^= 0x10;
-    std::vector<uint8_t> payload = {1, 2, 3, 4, 5, 6, 7, 8};
-    skiplist_ = store::encode_blob(store::Method::raw, payload);
-    std::string skip_key = "skiplist/raw";
-    std::vector<store::Store::Put> puts{{store::Database::tiles, {key.begin(), key.end()}, bytes},
-                                        {store::Database::top, {skip_key.begin(), skip_key.end()}, skiplist_}};
+    auto top = (*store)->get(store::Database::top, store::as_bytes(top_tree_key(store::Method::mh)));
+    ASSERT_TRUE(top.ok() && top->has_value());
+    skiplist_ = **top;
+    std::vector<store::Store::Put> puts{{store::Database::tiles, {key.begin(), key.end()}, bytes}};
     ASSERT_TRUE((*store)->write(puts).ok());
     store->reset();
     // A world point whose texel lies in tile (1, 1); the map is closed again before any server
@@ -690,13 +730,13 @@ TEST_F(DamagedStoreTest, CorruptBlobIsNeverServedAndHealthWaitsForTheStore) {
   ASSERT_TRUE(good);
   EXPECT_EQ(good->status, 200) << "other tiles still served";
 
-  auto skiplist = cli.Get("/v1/skiplist");
+  auto skiplist = cli.Get("/v1/skiplist?method=mh");
   ASSERT_TRUE(skiplist);
   ASSERT_EQ(skiplist->status, 200);
   EXPECT_EQ(skiplist->body, std::string(skiplist_.begin(), skiplist_.end()));
   std::string etag = strong_etag(store::check_blob(skiplist_)->checksum);
   EXPECT_EQ(skiplist->get_header_value("ETag"), etag);
-  auto cached = cli.Get("/v1/skiplist?method=raw", {{"If-None-Match", etag}});
+  auto cached = cli.Get("/v1/skiplist?method=mh", {{"If-None-Match", etag}});
   ASSERT_TRUE(cached);
   EXPECT_EQ(cached->status, 304);
 
@@ -826,6 +866,86 @@ TEST(ServeCommand, ConfigFlagsAndSigtermDrain) {
   ASSERT_TRUE(WIFEXITED(status)) << rest;
   EXPECT_EQ(WEXITSTATUS(status), 0) << rest;
   EXPECT_NE(rest.find("stopped on signal"), std::string::npos) << rest;
+}
+
+
+// Swapping builds (DESIGN.md §9): the server follows the store path (a symlink repointed
+// atomically), publishes the new build without a restart, keeps builders out of the directory it
+// serves, and keeps serving the current build when the path holds no complete build.
+TEST(ServerReload, SwapsToTheBuildTheStorePathPointsAt) {
+  TempDir dir;
+  const auto a = dir.path() / "a.store", b = dir.path() / "b.store";
+  ASSERT_TRUE(run_build(bunny_config(a, {store::Method::raw})).ok());
+  BuildConfig config_b = bunny_config(b, {store::Method::raw, store::Method::mh});
+  config_b.light_direction = *light_direction_from_sun(200, 60, UpAxis::y);
+  ASSERT_TRUE(run_build(config_b).ok());
+  std::filesystem::copy(b, dir.path() / "b-reference.store", std::filesystem::copy_options::recursive);
+  auto reference_b = ShadowMap::open(dir.path() / "b-reference.store");
+  ASSERT_TRUE(reference_b.ok());
+
+  const auto current = dir.path() / "current";
+  std::filesystem::create_directory_symlink(a, current);
+  auto repoint = [&](const std::filesystem::path& target) {  // ln -sfn: rename a new link over the old
+    const auto next = dir.path() / "current.next";
+    std::filesystem::create_directory_symlink(target, next);
+    std::filesystem::rename(next, current);
+  };
+  auto config = test_config();
+  config.reload_poll_s = 1;
+  RunningServer running(config, &current);
+  auto cli = running.client();
+  auto served_build = [&] {
+    auto res = cli.Get("/v1/meta");
+    return res && res->status == 200 ? json::parse(res->body)["shadow"]["build_id"].get<std::string>() : "";
+  };
+  const std::string id_a = served_build();
+  ASSERT_FALSE(id_a.empty());
+  EXPECT_EQ(id_a, running.server().build_id());
+
+  EXPECT_FALSE(store::ServingLock::acquire(a, store::ServingLock::Kind::build).ok()) << "served: no builds";
+  auto rebuilt = run_build(bunny_config(a, {store::Method::raw}));
+  ASSERT_FALSE(rebuilt.ok()) << "a build refuses a served store";
+  EXPECT_NE(rebuilt.error().message.find("being served"), std::string::npos) << rebuilt.error().message;
+  EXPECT_TRUE(store::ServingLock::acquire(b, store::ServingLock::Kind::build).ok());
+  auto unchanged = running.server().reload();
+  ASSERT_TRUE(unchanged.ok()) << unchanged.error().message;
+  EXPECT_FALSE(*unchanged);
+
+  repoint(b);  // picked up by the poller, no SIGHUP needed
+  std::string id_b = id_a;
+  for (int i = 0; i < 100 && id_b == id_a; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    id_b = served_build();
+  }
+  ASSERT_NE(id_b, id_a);
+  EXPECT_EQ(id_b, reference_b->get()->meta().config_hash);
+  expect_json_error(cli.Get("/v1/builds/" + id_a + "/tiles/raw/2/1/1"), 404, "the replaced build");
+  auto tile = cli.Get("/v1/builds/" + id_b + "/tiles/raw/2/1/1");
+  ASSERT_TRUE(tile);
+  EXPECT_TRUE(tile->status == 200 || tile->status == 204) << tile->status;
+  auto top = cli.Get("/v1/skiplist?method=mh");
+  ASSERT_TRUE(top);
+  EXPECT_EQ(top->status, 200) << "the new build's methods are served";
+  LoadOptions load;
+  load.up = UpAxis::y;
+  auto scene = load_scene(testing::shared_scene(kBunny), load);
+  ASSERT_TRUE(scene.ok());
+  for (const Receiver& r : sample_receivers(*scene, 200, 3)) {
+    auto res = cli.Get(shadow_url(r.position));
+    ASSERT_TRUE(res);
+    ASSERT_EQ(res->status, 200);
+    auto expected = reference_b->get()->query(r.position, store::Method::raw);
+    ASSERT_TRUE(expected.ok());
+    EXPECT_EQ(json::parse(res->body)["lit"].get<double>(), expected->lit ? 1.0 : 0.0);
+  }
+  EXPECT_TRUE(store::ServingLock::acquire(a, store::ServingLock::Kind::build).ok())
+      << "the old build is closed once its requests are done";
+
+  const auto empty = dir.path() / "empty";
+  std::filesystem::create_directory(empty);
+  repoint(empty);
+  EXPECT_FALSE(running.server().reload().ok()) << "no build there";
+  EXPECT_EQ(served_build(), id_b) << "the current build stays served";
 }
 
 }  // namespace

@@ -11,7 +11,7 @@ namespace shadowtiles::bench {
 Result<std::map<store::Method, MethodSize>> method_sizes(const ShadowMap& map) {
   std::map<store::Method, MethodSize> sizes;
   bool corrupt = false;
-  Status walked = map.store().for_each(store::Database::tiles, {}, [&](auto key, auto value) {
+  Status walked = map.local_store()->for_each(store::Database::tiles, {}, [&](auto key, auto value) {
     auto tile_key = store::decode_tile_key(key);
     auto header = store::check_blob(value);
     if (!tile_key || !header) { corrupt = true; return false; }
@@ -31,7 +31,7 @@ Result<uint64_t> count_nonempty_texels(const ShadowMap& map) {
     return make_error(ErrorCode::unsupported, "non-empty texels are counted on raw tiles; the store has none");
   // Collect the keys first: decoding inside for_each would hold the read transaction for long.
   std::vector<store::TileKey> keys;
-  Status walked = map.store().for_each(store::Database::tiles, {}, [&](auto key, auto) {
+  Status walked = map.local_store()->for_each(store::Database::tiles, {}, [&](auto key, auto) {
     auto tile_key = store::decode_tile_key(key);
     if (tile_key && tile_key->method == store::Method::raw) keys.push_back(*tile_key);
     return true;
@@ -39,7 +39,7 @@ Result<uint64_t> count_nonempty_texels(const ShadowMap& map) {
   if (!walked) return walked.error();
   uint64_t count = 0;
   for (const store::TileKey& key : keys) {
-    auto blob = map.store().get(store::Database::tiles, store::encode_tile_key(key));
+    auto blob = map.local_store()->get(store::Database::tiles, store::encode_tile_key(key));
     if (!blob) return blob.error();
     if (!blob->has_value()) continue;
     auto payload = store::decode_blob(**blob);
