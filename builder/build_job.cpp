@@ -100,6 +100,7 @@ nlohmann::json build_identity(const BuildConfig& config, uint64_t scene_hash, ui
           {"construction", config.construction == MhConstruction::top_down ? "top_down" : "bottom_up"}};
   // Only when set, so stores built before the option existed keep their identity.
   if (config.open_exit_at_far_plane) identity["open_exit_at_far_plane"] = true;
+  if (config.cap_exits_at_receiver_surfaces) identity["exit_caps"] = "receiver_surfaces";
   return identity;
 }
 
@@ -251,6 +252,7 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   DualDepthOptions depth_options;
   depth_options.exit_margin = float(frame->depth_from_world(meta.exit_margin));
   depth_options.open_exit_at_far_plane = config.open_exit_at_far_plane;
+  depth_options.cap_exits_at_receiver_surfaces = config.cap_exits_at_receiver_surfaces;
   DualDepthRenderer renderer(*device, light_scene, depth_options);
   TileEncodeOptions encode_options;
   encode_options.construction = config.construction;

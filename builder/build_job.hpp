@@ -47,6 +47,11 @@ struct BuildConfig {
   // Comparison only (stability suite): open surfaces exit at the far plane, the MMH authors' rule
   // that leaks light under open surfaces (DualDepthOptions::open_exit_at_far_plane).
   bool open_exit_at_far_plane = false;
+  // Exits capped by every shadowed surface inside the texel (DualDepthOptions; `build --exit-caps`):
+  // receivers off the texel centre (silhouettes, ridges at a grazing sun) never get more light than
+  // raw gives them. Off by default: it costs size (stability suite, issue #8: nefertiti 2048^2 MH
+  // x1.6, terragen 1024^2 x2.2) and, unoptimised, build time (fzk_haus 8192^2: 9.5 s -> 7 min).
+  bool cap_exits_at_receiver_surfaces = false;
   // Progress callback, called from the coordinating thread about once a second.
   std::function<void(const std::string& line)> on_progress;
   // Test hook: after this many tiles are committed, the process kills itself with SIGKILL.

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <string>
 #include <unordered_map>
@@ -278,24 +279,43 @@ Status encode_chunk(const DepthInterval* iv, unsigned n, std::vector<uint8_t>& o
   return Status::success();
 }
 
-}  // namespace
 
-Result<std::vector<uint8_t>> encode_dagmh(const MhHierarchy& h, const DagMhOptions& o) {
-  if (Status s = check_structure(h); !s) return s.error();
+// The treelet-height-dependent part of a payload: DAG nodes and treelets, and the depth-first
+// value intervals (the same list for every treelet height: pre-order of the same tree).
+struct TopologyPart {
+  std::vector<uint8_t> body;  // DAG section, then treelets
+  uint64_t dag_bytes = 0, treelets = 0;
+  unsigned ref_width = 1, count_width = 1;
+  unsigned root_code = 0;
+  uint32_t root_ref = 0;
+  std::vector<DepthInterval> values;
+};
+
+// The chunk-size-dependent part: chunk offsets and chunk data.
+struct ValuePart {
+  std::vector<uint64_t> offsets;
+  std::vector<uint8_t> chunks;
+  unsigned offset_width = 1;
+};
+
+Status check_options(const DagMhOptions& o) {
   if (o.treelet_height < F::kMinTreeletHeight || o.treelet_height > F::kMaxTreeletHeight)
     return invalid("treelet height must be 2..5");
   if (o.chunk_size < 1 || o.chunk_size > F::kMaxChunkSize) return invalid("chunk size must be 1..1024");
   if (o.hash_bits < 1 || o.hash_bits > 64) return invalid("hash bits must be 1..64");
+  return Status::success();
+}
 
+Result<TopologyPart> encode_topology(const MhHierarchy& h, const DagMhOptions& o) {
   Encoder e(h, o);
   const Ref root = e.emit_root();
+  TopologyPart t;
   const uint64_t n_values = e.values_.size();
   if (n_values > UINT32_MAX) return invalid("too many values");
 
   // DAG layout: nodes were created children first; reversed, every reference points forward and
   // the root (created last) sits at offset 0.
-  const uint64_t max_count = n_values;
-  const unsigned wc = width_for(max_count);
+  const unsigned wc = width_for(n_values);
   unsigned wr = 1;
   uint64_t dag_bytes = 0;
   for (;; ++wr) {
@@ -313,8 +333,7 @@ Result<std::vector<uint8_t>> encode_dagmh(const MhHierarchy& h, const DagMhOptio
       at += F::node_bytes(e.nodes_[i].mask, wr, wc);
     }
   }
-
-  std::vector<uint8_t> body;
+  std::vector<uint8_t>& body = t.body;
   for (size_t i = e.nodes_.size(); i-- > 0;) {
     const DagNode& n = e.nodes_[i];
     body.push_back(n.mask);
@@ -331,56 +350,125 @@ Result<std::vector<uint8_t>> encode_dagmh(const MhHierarchy& h, const DagMhOptio
       first = false;
     }
   }
-  for (const auto& t : e.treelets_) body.insert(body.end(), t.begin(), t.end());
+  for (const auto& tl : e.treelets_) body.insert(body.end(), tl.begin(), tl.end());
+  t.dag_bytes = dag_bytes;
+  t.treelets = e.treelets_.size();
+  t.ref_width = wr;
+  t.count_width = wc;
+  t.root_code = root.code;
+  t.root_ref = root.code == F::kCodeDag ? offset[root.id] : root.code == F::kCodeTreelet ? root.id : 0;
+  t.values = std::move(e.values_);
+  return t;
+}
 
-  // Value chunks.
-  std::vector<uint8_t> chunks;
-  std::vector<uint64_t> chunk_offsets;
-  for (uint64_t at = 0; at < n_values; at += o.chunk_size) {
-    chunk_offsets.push_back(chunks.size());
-    const unsigned n = unsigned(std::min<uint64_t>(o.chunk_size, n_values - at));
-    if (Status s = encode_chunk(e.values_.data() + at, n, chunks); !s) return s.error();
+Result<ValuePart> encode_values(const std::vector<DepthInterval>& values, unsigned chunk_size) {
+  ValuePart v;
+  for (uint64_t at = 0; at < values.size(); at += chunk_size) {
+    v.offsets.push_back(v.chunks.size());
+    const unsigned n = unsigned(std::min<uint64_t>(chunk_size, values.size() - at));
+    if (Status s = encode_chunk(values.data() + at, n, v.chunks); !s) return s.error();
   }
-  if (chunks.size() > UINT32_MAX) return invalid("values over 4 GiB");
-  const unsigned wo = width_for(chunks.size());
+  if (v.chunks.size() > UINT32_MAX) return invalid("values over 4 GiB");
+  v.offset_width = width_for(v.chunks.size());
+  return v;
+}
 
+std::vector<uint8_t> assemble(const MhHierarchy& h, unsigned treelet_height, unsigned chunk_size,
+                              const TopologyPart& t, const ValuePart& v) {
+  const unsigned wo = v.offset_width;
   std::vector<uint8_t> out;
-  out.reserve(F::kHeaderBytes + body.size() + chunk_offsets.size() * wo + chunks.size());
+  out.reserve(F::kHeaderBytes + t.body.size() + v.offsets.size() * wo + v.chunks.size());
   out.insert(out.end(), F::kMagic, F::kMagic + 4);
   put_uint(out, F::kFormatVersion, 2);
   put_uint(out, 0, 2);
   put_uint(out, h.size, 4);
   out.push_back(uint8_t(h.levels));
-  out.push_back(uint8_t(o.treelet_height));
-  out.push_back(uint8_t(wr));
-  out.push_back(uint8_t(wc));
+  out.push_back(uint8_t(treelet_height));
+  out.push_back(uint8_t(t.ref_width));
+  out.push_back(uint8_t(t.count_width));
   out.push_back(uint8_t(wo));
-  out.push_back(uint8_t(root.code));
-  put_uint(out, o.chunk_size, 2);
-  put_uint(out, root.code == F::kCodeDag ? offset[root.id] : root.code == F::kCodeTreelet ? root.id : 0, 4);
-  put_uint(out, dag_bytes, 4);
-  put_uint(out, e.treelets_.size(), 4);
-  put_uint(out, n_values, 4);
-  put_uint(out, chunks.size(), 4);
-  out.insert(out.end(), body.begin(), body.end());
-  for (uint64_t off : chunk_offsets) put_uint(out, off, wo);
-  out.insert(out.end(), chunks.begin(), chunks.end());
+  out.push_back(uint8_t(t.root_code));
+  put_uint(out, chunk_size, 2);
+  put_uint(out, t.root_ref, 4);
+  put_uint(out, t.dag_bytes, 4);
+  put_uint(out, t.treelets, 4);
+  put_uint(out, t.values.size(), 4);
+  put_uint(out, v.chunks.size(), 4);
+  out.insert(out.end(), t.body.begin(), t.body.end());
+  for (uint64_t off : v.offsets) put_uint(out, off, wo);
+  out.insert(out.end(), v.chunks.begin(), v.chunks.end());
   return out;
+}
+
+}  // namespace
+
+Result<std::vector<uint8_t>> encode_dagmh(const MhHierarchy& h, const DagMhOptions& o) {
+  if (Status s = check_structure(h); !s) return s.error();
+  if (Status s = check_options(o); !s) return s.error();
+  auto topology = encode_topology(h, o);
+  if (!topology) return topology.error();
+  auto values = encode_values(topology->values, o.chunk_size);
+  if (!values) return values.error();
+  return assemble(h, o.treelet_height, o.chunk_size, *topology, *values);
+}
+
+Result<DagMhTopology> dagmh_topology(const MhHierarchy& h, unsigned treelet_height) {
+  if (Status s = check_structure(h); !s) return s.error();
+  const DagMhOptions o{treelet_height, 32, 64};
+  if (Status s = check_options(o); !s) return s.error();
+  Encoder e(h, o);
+  const Ref root = e.emit_root();
+  DagMhTopology t;
+  t.nodes.reserve(e.nodes_.size());
+  for (const DagNode& n : e.nodes_) {
+    DagMhTopology::Node node;
+    node.mask = n.mask;
+    node.valued = n.valued;
+    std::copy(std::begin(n.child_id), std::end(n.child_id), node.child_id);
+    t.nodes.push_back(node);
+  }
+  t.treelets = std::move(e.treelets_);
+  t.root_code = root.code;
+  t.root_id = root.id;
+  t.values = e.values_.size();
+  return t;
+}
+
+Status for_each_dagmh_parameter(const MhHierarchy& h, const std::vector<unsigned>& heights,
+                                const std::vector<unsigned>& chunks,
+                                const std::function<Status(unsigned, unsigned, std::span<const uint8_t>)>& visit) {
+  if (Status s = check_structure(h); !s) return s.error();
+  for (unsigned height : heights)
+    for (unsigned c : chunks)
+      if (Status s = check_options(DagMhOptions{height, c, 64}); !s) return s.error();
+  // Every treelet height lists the same values (pre-order of one tree): chunks are coded once per size.
+  std::vector<ValuePart> value_parts;
+  for (size_t hi = 0; hi < heights.size(); ++hi) {
+    auto topology = encode_topology(h, DagMhOptions{heights[hi], 32, 64});
+    if (!topology) return topology.error();
+    for (size_t ci = 0; ci < chunks.size(); ++ci) {
+      if (hi == 0) {
+        auto values = encode_values(topology->values, chunks[ci]);
+        if (!values) return values.error();
+        value_parts.push_back(std::move(*values));
+      }
+      const std::vector<uint8_t> payload = assemble(h, heights[hi], chunks[ci], *topology, value_parts[ci]);
+      if (Status s = visit(heights[hi], chunks[ci], payload); !s) return s;
+    }
+  }
+  return Status::success();
 }
 
 Result<std::vector<DagMhStudyPoint>> dagmh_parameter_study(const MhHierarchy& hierarchy,
                                                            const std::vector<unsigned>& heights,
                                                            const std::vector<unsigned>& chunks) {
   std::vector<DagMhStudyPoint> points;
-  for (unsigned hgt : heights)
-    for (unsigned c : chunks) {
-      DagMhOptions o;
-      o.treelet_height = hgt;
-      o.chunk_size = c;
-      auto bytes = encode_dagmh(hierarchy, o);
-      if (!bytes) return bytes.error();
-      points.push_back({hgt, c, bytes->size()});
-    }
+  Status s = for_each_dagmh_parameter(hierarchy, heights, chunks,
+                                      [&](unsigned height, unsigned c, std::span<const uint8_t> payload) {
+                                        points.push_back({height, c, payload.size()});
+                                        return Status::success();
+                                      });
+  if (!s) return s.error();
   return points;
 }
 

@@ -13,6 +13,9 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
 #include <vector>
 
 #include "builder/mh_hierarchy.hpp"
@@ -29,6 +32,31 @@ struct DagMhOptions {
 };
 
 Result<std::vector<uint8_t>> encode_dagmh(const MhHierarchy& hierarchy, const DagMhOptions& options = {});
+
+// Every (treelet height, chunk size) payload of `hierarchy`, byte-identical to encode_dagmh with
+// those options, handed to `visit` (heights outer) and valid only during the call. Cheaper than
+// separate encodes: the topology is built once per height and the value chunks once per size.
+// Stops at the first error (invalid_input as encode_dagmh, or what `visit` returns).
+Status for_each_dagmh_parameter(const MhHierarchy& hierarchy, const std::vector<unsigned>& heights,
+                                const std::vector<unsigned>& chunks,
+                                const std::function<Status(unsigned, unsigned, std::span<const uint8_t>)>& visit);
+
+// One tile's deduplicated topology as encode_dagmh builds it, for studies (builder/dagmh_sharing_study):
+// DAG nodes in creation order (children before parents; child_id indexes `nodes` for code 3 and
+// `treelets` for code 2), treelet bitmaps, the root's code and id, the tile's value count.
+struct DagMhTopology {
+  struct Node {
+    uint8_t mask = 0;  // 2-bit child codes (client/dagmh_format.hpp)
+    bool valued = false;
+    uint32_t child_id[4] = {0, 0, 0, 0};
+  };
+  std::vector<Node> nodes;
+  std::vector<std::string> treelets;
+  unsigned root_code = 0;
+  uint32_t root_id = 0;
+  uint64_t values = 0;
+};
+Result<DagMhTopology> dagmh_topology(const MhHierarchy& hierarchy, unsigned treelet_height = 4);
 
 // Parameter study: payload bytes for every treelet height in `heights` x chunk size in `chunks`
 // (row-major: heights outer). Errors as encode_dagmh.

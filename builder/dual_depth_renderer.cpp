@@ -337,9 +337,9 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
   (void)closed_id;
   // Cap every exit by the receiver surfaces inside its texel (see receiver_surface_caps); the
   // far-plane comparison rule is measured as its authors have it, uncapped.
-  const std::vector<float> caps = options_.open_exit_at_far_plane ? std::vector<float>(intervals.texels.size(),
-                                                                                       std::numeric_limits<float>::infinity())
-                                                                  : receiver_surface_caps(scene_, tile);
+  const bool capped = options_.cap_exits_at_receiver_surfaces && !options_.open_exit_at_far_plane;
+  const std::vector<float> caps = capped ? receiver_surface_caps(scene_, tile)
+                                         : std::vector<float>(intervals.texels.size(), std::numeric_limits<float>::infinity());
   local.exits = 0;
   for (size_t i = 0; i < intervals.texels.size(); ++i) {
     DepthInterval& interval = intervals.texels[i];

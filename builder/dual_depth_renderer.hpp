@@ -5,7 +5,8 @@
 //   a counter (+1 front-facing, -1 back-facing); where it returns to 0 is the exit. The exit is
 //   pulled back by `exit_margin` plus the exit surface's depth change over half a texel, so receivers
 //   anywhere on the exit surface within the texel (a floor under a box, the shadowed slope of a
-//   hill) stay shadowed for any query bias up to that margin;
+//   hill) stay shadowed for any query bias up to that margin; with cap_exits_at_receiver_surfaces,
+//   also by every shadowed surface inside the texel's square (silhouettes, ridges);
 // - a first hit on an open mesh, a back-facing first hit, or a counter that never returns to 0
 //   before an open surface: upper = lower (conservative, never leaks light);
 // - heightfield meshes bound a solid closed by the far plane: they join the counter walk, so a ray
@@ -43,6 +44,12 @@ struct DualDepthOptions {
   // first hit is an open surface exits at the far plane (everything behind it counts as solid). It
   // leaks light onto receivers under open surfaces; the stability suite measures how much.
   bool open_exit_at_far_plane = false;
+  // Cap each exit by the shallowest surface a shadowed receiver can lie on inside the texel's square
+  // (back faces of closed meshes and heightfields, open triangles), so receivers anywhere in the
+  // texel, not only on its centre ray, keep raw's answer or better. Off here for the analytic tests
+  // of the centre-ray rule; the build job turns it on (BuildConfig::cap_exits_at_receiver_surfaces).
+  // Conservative: a back face inside another closed mesh (intersecting solids) also caps.
+  bool cap_exits_at_receiver_surfaces = false;
 };
 
 class DualDepthRenderer {

@@ -8,6 +8,7 @@
 
 #include "builder/dual_depth_renderer.hpp"
 #include "builder/light_space_scene.hpp"
+#include "client/cpvs_format.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -38,6 +39,28 @@ void check_tile(const TileIntervals& intervals, const DecodedTile* tile, TileCoo
     }
 }
 
+// CPVS stores visibility per quantised depth step, not a value, and is lossy by that quantisation:
+// depths within a step of a bound may go either way. The rule checked (docs/cpvs.md): a receiver
+// 1.5 steps in front of `lower` is lit and one 1.5 steps behind a finite `upper` shadowed (when that
+// is still in front of the far plane). `outside` stays 0: there is no value to bound.
+void check_cpvs_tile(const TileIntervals& intervals, const DecodedTile* tile, TileCoord coord, uint32_t depth_steps,
+                     MethodVerification& out) {
+  ++out.tiles;
+  const float margin = 1.5f / float(depth_steps);
+  for (uint32_t v = 0; v < intervals.size; ++v)
+    for (uint32_t u = 0; u < intervals.size; ++u) {
+      const DepthInterval& interval = intervals.at(u, v);
+      ++out.texels;
+      const float before = interval.lower - margin, behind = interval.upper + margin;
+      bool wrong = tile && !tile->lit(u, v, before);
+      if (std::isfinite(interval.upper) && behind < 1.0f) wrong |= !tile || tile->lit(u, v, behind);
+      if (wrong && out.wrong_answers++ == 0)
+        out.first_violation = "tile " + std::to_string(coord.x) + "," + std::to_string(coord.y) + " texel " +
+                              std::to_string(u) + "," + std::to_string(v) + ": cpvs answer more than a step off [" +
+                              std::to_string(interval.lower) + ", " + std::to_string(interval.upper) + "]";
+    }
+}
+
 }  // namespace
 
 Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, const std::vector<store::Method>& methods,
@@ -55,6 +78,7 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
   std::vector<TileCoord> tiles;
   for (uint64_t i = 0; i < map.layout().tile_count(); ++i) tiles.push_back(TileLayout::from_morton_index(i));
 
+  const uint32_t cpvs_steps = cpvs::depth_steps_for(map.layout().resolution(), map.layout().tile_size());
   VerifyReport report;
   for (store::Method m : methods) report.methods[m];
   std::mutex mutex;
@@ -83,7 +107,10 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
           error = tile.error();
           return;
         }
-        check_tile(*intervals, tile->get(), tiles[i], local[m]);
+        if (m == store::Method::cpvs)
+          check_cpvs_tile(*intervals, tile->get(), tiles[i], cpvs_steps, local[m]);
+        else
+          check_tile(*intervals, tile->get(), tiles[i], local[m]);
       }
       std::lock_guard lock(mutex);
       for (auto& [m, v] : local) {

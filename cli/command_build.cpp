@@ -20,7 +20,7 @@ struct BuildFlags {
   unsigned threads = 2;
   std::vector<std::string> heightfields;
   double bias_texels = 2.0, exit_margin_texels = 4.0;
-  bool overwrite = false, json = false;
+  bool overwrite = false, json = false, exit_caps = false;
   uint64_t kill_after = 0;
 };
 
@@ -58,6 +58,7 @@ int run(const BuildFlags& flags) {
   config.bias_texels = flags.bias_texels;
   config.exit_margin_texels = flags.exit_margin_texels;
   config.overwrite = flags.overwrite;
+  config.cap_exits_at_receiver_surfaces = flags.exit_caps;
   config.debug_kill_after_tiles = flags.kill_after;
   config.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
 
@@ -110,6 +111,9 @@ void add_build_command(CLI::App& app, int& exit_code) {
                   "Closed-mesh exits pulled back by this many texel widths (>= bias)")->capture_default_str();
   cmd->add_option("--mh-construction", flags->construction, "MH family: bottom-up or top-down (SBE16a Alg. 1)")
       ->capture_default_str();
+  cmd->add_flag("--exit-caps", flags->exit_caps,
+                "Cap exits by every shadowed surface inside the texel: receivers off the texel centre never get "
+                "more light than raw gives them; larger stores, much slower builds (STABILITY.md)");
   cmd->add_flag("--overwrite", flags->overwrite, "Replace a different build in --out");
   cmd->add_flag("--json", flags->json, "Print the build summary as JSON");
   cmd->add_option("--debug-kill-after-tiles", flags->kill_after, "Test hook: SIGKILL self after N tiles")

@@ -1,14 +1,20 @@
 // `shadowtiles inspect STORE [--json]`: what a store holds: the build's meta and, per method, tiles
-// and bytes (compressed at rest and decoded payload).
+// and bytes (compressed at rest and decoded payload), and the payload split into the parts each
+// method names (DecodedTile::size_breakdown), summed over every tile: a method shows up here by
+// implementing that virtual.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <map>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
 #include "cli/commands.hpp"
 #include "cli/exit_codes.hpp"
+#include "client/dagmh_decoder.hpp"
+#include "client/decoded_tile.hpp"
 #include "client/mh_decoder.hpp"
 #include "client/store_meta.hpp"
 #include "store/blob.hpp"
@@ -29,7 +35,22 @@ struct MethodTotals {
   bool hierarchical = false;
   uint64_t inner = 0, empty = 0, leaves = 0, blocks = 0, block_references = 0, skip_list_bytes = 0;
   unsigned levels = 0;
+  // Payload parts summed over tiles, in the order the decoder names them.
+  std::vector<DecodedTile::SizePart> parts;
+  bool undecodable = false;  // no decoder in this build: no breakdown
+  // DAG-MH counts.
+  bool dag = false;
+  uint64_t dag_nodes = 0, treelets = 0, values = 0, chunks = 0, representative_values = 0, quantized_values = 0,
+           raw_values = 0;
 };
+
+void add_parts(std::vector<DecodedTile::SizePart>& sum, const std::vector<DecodedTile::SizePart>& parts) {
+  for (const auto& part : parts) {
+    auto it = std::find_if(sum.begin(), sum.end(), [&](const auto& p) { return p.name == part.name; });
+    if (it == sum.end()) sum.push_back(part);
+    else it->bytes += part.bytes;
+  }
+}
 
 int run(const InspectFlags& flags) {
   auto opened = store::Store::open(flags.store, {});
@@ -53,12 +74,40 @@ int run(const InspectFlags& flags) {
     ++t.tiles;
     t.blob_bytes += value.size();
     t.payload_bytes += header->raw_size;
-    if (tile_key->method == store::Method::mh || tile_key->method == store::Method::mmh) {
-      auto payload = store::decode_blob(value);
-      if (!payload) {
-        corrupt = payload.error();
+    auto payload = store::decode_blob(value);
+    if (!payload) {
+      corrupt = payload.error();
+      return false;
+    }
+    if (!t.undecodable) {
+      auto decoded = decode_tile(tile_key->method, *payload);
+      if (!decoded && decoded.error().code == ErrorCode::unsupported) {
+        t.undecodable = true;
+        t.parts.clear();
+      } else if (!decoded) {
+        corrupt = decoded.error();
+        return false;
+      } else {
+        add_parts(t.parts, (*decoded)->size_breakdown());
+      }
+    }
+    if (tile_key->method == store::Method::dagmh) {
+      auto view = DagMhTileView::parse(*payload, DagMhParseOptions{0});
+      if (!view) {
+        corrupt = view.error();
         return false;
       }
+      const DagMhStats& stats = view->stats();
+      t.dag = true;
+      t.dag_nodes += stats.dag_nodes;
+      t.treelets += stats.treelets;
+      t.values += stats.values;
+      t.chunks += stats.chunks;
+      t.representative_values += stats.representative_values;
+      t.quantized_values += stats.quantized_values;
+      t.raw_values += stats.raw_values;
+    }
+    if (tile_key->method == store::Method::mh || tile_key->method == store::Method::mmh) {
       auto view = MhTileView::parse(*payload);
       if (!view) {
         corrupt = view.error();
@@ -92,6 +141,22 @@ int run(const InspectFlags& flags) {
       methods[name]["nodes"] = {{"inner", t.inner}, {"empty", t.empty}, {"leaf", t.leaves},
                                 {"blocks", t.blocks}, {"block_references", t.block_references},
                                 {"levels_in_tile", t.levels}};
+    if (t.dag)
+      methods[name]["dag"] = {{"dag_nodes", t.dag_nodes},
+                              {"treelets", t.treelets},
+                              {"values", t.values},
+                              {"chunks", t.chunks},
+                              {"representative_values", t.representative_values},
+                              {"quantized_values", t.quantized_values},
+                              {"raw_values", t.raw_values}};
+    if (!t.parts.empty()) {
+      nlohmann::json parts = nlohmann::json::array();
+      for (const auto& part : t.parts)
+        parts.push_back({{"name", part.name},
+                         {"bytes", part.bytes},
+                         {"fraction", t.payload_bytes > 0 ? double(part.bytes) / double(t.payload_bytes) : 0.0}});
+      methods[name]["payload_parts"] = parts;
+    }
   }
   nlohmann::json report = {{"meta", meta->to_json()}, {"methods", methods}};
   if (flags.json) {
@@ -111,6 +176,21 @@ int run(const InspectFlags& flags) {
       std::printf("%-8s nodes: %llu inner, %llu empty, %llu leaf; %llu child blocks (%llu references); %u levels per tile\n",
                   name.c_str(), (unsigned long long)t.inner, (unsigned long long)t.empty, (unsigned long long)t.leaves,
                   (unsigned long long)t.blocks, (unsigned long long)t.block_references, t.levels);
+  for (auto& [name, t] : totals)
+    if (t.dag)
+      std::printf("%-8s %llu DAG nodes, %llu treelets; %llu values in %llu chunks: %llu representative, %llu "
+                  "quantised, %llu raw\n",
+                  name.c_str(), (unsigned long long)t.dag_nodes, (unsigned long long)t.treelets,
+                  (unsigned long long)t.values, (unsigned long long)t.chunks,
+                  (unsigned long long)t.representative_values, (unsigned long long)t.quantized_values,
+                  (unsigned long long)t.raw_values);
+  for (auto& [name, t] : totals) {
+    if (t.parts.empty()) continue;
+    std::printf("%s payload parts:\n", name.c_str());
+    for (const auto& part : t.parts)
+      std::printf("  %-24s %14llu B %6.2f%%\n", part.name.c_str(), (unsigned long long)part.bytes,
+                  t.payload_bytes > 0 ? 100.0 * double(part.bytes) / double(t.payload_bytes) : 0.0);
+  }
   if (hit_texels > 0) std::printf("non-empty texels: %.0f (bytes per non-empty texel in --json)\n", hit_texels);
   return kOk;
 }

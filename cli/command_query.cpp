@@ -1,5 +1,6 @@
-// `shadowtiles query STORE --point X,Y,Z ...`: is a world point lit? Optionally beside the Embree
-// ground truth of the scene.
+// `shadowtiles query (STORE | --server URL) --point X,Y,Z ...`: is a world point lit? From a local
+// store, or streamed from a server by the client (client/streaming_client.hpp), optionally beside
+// the Embree ground truth of the scene.
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -15,12 +16,13 @@
 #include "cli/commands.hpp"
 #include "cli/exit_codes.hpp"
 #include "client/shadow_map.hpp"
+#include "client/streaming_client.hpp"
 
 namespace shadowtiles::cli {
 namespace {
 
 struct QueryFlags {
-  std::string store, method, ground_truth;
+  std::string store, server, method, ground_truth;
   std::vector<std::string> points;
   double bias = -1;
   size_t sample = 0;
@@ -28,9 +30,13 @@ struct QueryFlags {
 };
 
 int run(const QueryFlags& flags) {
-  auto map = ShadowMap::open(flags.store);
+  if (flags.store.empty() == flags.server.empty()) {
+    spdlog::error("give a STORE directory or --server URL (one of them)");
+    return kInvalidInput;
+  }
+  auto map = open_shadow_map(flags.server.empty() ? flags.store : flags.server, StreamingOptions{});
   if (!map) {
-    spdlog::error("cannot open store: {}", map.error().message);
+    spdlog::error("cannot open {}: {}", flags.server.empty() ? "store" : "server", map.error().message);
     return exit_code_for(map.error());
   }
   store::Method method = (*map)->default_method();
@@ -109,8 +115,9 @@ int run(const QueryFlags& flags) {
 
 void add_query_command(CLI::App& app, int& exit_code) {
   auto flags = std::make_shared<QueryFlags>();
-  CLI::App* cmd = app.add_subcommand("query", "Is a world point lit? (from a local store)");
-  cmd->add_option("store", flags->store, "Store directory")->required();
+  CLI::App* cmd = app.add_subcommand("query", "Is a world point lit? (from a local store or a server)");
+  cmd->add_option("store", flags->store, "Store directory (or give --server)");
+  cmd->add_option("--server", flags->server, "Stream the build from this server (http://host:port) instead");
   cmd->add_option("--point,-p", flags->points, "World point X,Y,Z (repeatable)")->take_all();
   cmd->add_option("--sample", flags->sample, "Also query N points sampled on the --ground-truth scene's surfaces");
   cmd->add_option("--bias", flags->bias, "Depth bias in world units (default: the build's)");

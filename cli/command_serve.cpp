@@ -1,6 +1,7 @@
 // `shadowtiles serve STORE`: the HTTP shadow service (server/server.hpp; API and config keys in
 // config/README.md). Config: defaults, then --config FILE, then the flags given on the command line.
-// SIGTERM / SIGINT stop accepting, drain in-flight requests and exit 0.
+// SIGTERM / SIGINT stop accepting, drain in-flight requests and exit 0. SIGHUP (and a poll every
+// reload_poll_s) swaps to a new build at the store path (server/server.hpp, "Swapping builds").
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -50,10 +51,18 @@ int run(const ServeFlags& flags) {
   // The mutex keeps the watcher from calling stop() on a server being destroyed.
   std::mutex running_mutex;
   server::Server* running = nullptr;
-  server::ShutdownSignals signals([&](int) {
-    std::lock_guard lock(running_mutex);
-    if (running) running->stop();
-  });
+  server::ShutdownSignals signals(
+      [&](int) {
+        std::lock_guard lock(running_mutex);
+        if (running) running->stop();
+      },
+      [&] {
+        std::lock_guard lock(running_mutex);
+        if (!running) return;
+        auto reloaded = running->reload();
+        if (!reloaded) spdlog::warn("SIGHUP: keeping the current build: {}", reloaded.error().message);
+        else if (!*reloaded) spdlog::info("SIGHUP: the store path still holds the served build");
+      });
 
   auto bound = server::Server::bind(config);
   if (!bound) {
@@ -62,8 +71,13 @@ int run(const ServeFlags& flags) {
   }
   server::Server& server = **bound;
   if (Status s = server.attach_store(flags.store); !s) {
-    spdlog::error("cannot open store: {}", s.error().message);
-    return exit_code_for(s.error());
+    // A build still being written (or incomplete) is served once done, if the path is polled.
+    if (s.error().code != ErrorCode::invalid_input || config.reload_poll_s == 0) {
+      spdlog::error("cannot open store: {}", s.error().message);
+      return exit_code_for(s.error());
+    }
+    spdlog::warn("{}; answering 503 until it holds a complete build (checked every {} s)", s.error().message,
+                 config.reload_poll_s);
   }
   {
     std::lock_guard lock(running_mutex);

@@ -1,9 +1,49 @@
 #include "client/cpvs_decoder.hpp"
 
-namespace shadowtiles {
+#include <limits>
 
-Result<std::shared_ptr<const DecodedTile>> decode_cpvs_tile(std::span<const uint8_t>) {
-  return make_error(ErrorCode::unsupported, "the CPVS decoder is not built yet");
+#include "client/cpvs_tile_view.hpp"
+
+namespace shadowtiles {
+namespace {
+
+// Owns the payload; the view points into it.
+class CpvsDecodedTile final : public DecodedTile {
+ public:
+  static Result<std::shared_ptr<const DecodedTile>> make(std::span<const uint8_t> payload) {
+    auto tile = std::shared_ptr<CpvsDecodedTile>(new CpvsDecodedTile(payload));
+    auto view = CpvsTileView::parse(tile->payload_);
+    if (!view) return view.error();
+    tile->view_ = std::move(*view);
+    return std::shared_ptr<const DecodedTile>(std::move(tile));
+  }
+  uint32_t size() const override { return view_.size(); }
+  // Start of the first shadowed step: a depth-map stand-in for reports; lit() is the answer.
+  float value(uint32_t u, uint32_t v, unsigned) const override {
+    uint32_t step = view_.first_shadowed_step(u, v);
+    if (step >= view_.depth_steps()) return std::numeric_limits<float>::infinity();
+    return float(double(step) / double(view_.depth_steps()));
+  }
+  bool lit(uint32_t u, uint32_t v, float threshold, unsigned) const override { return view_.lit(u, v, threshold); }
+  uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const override {
+    return view_.lit_count(u0, v0, kw, kh, threshold);
+  }
+  size_t memory_bytes() const override { return payload_.size() + sizeof(*this); }
+  std::vector<SizePart> size_breakdown() const override {
+    const auto& s = view_.stats();
+    return {{"cpvs header", s.header_bytes}, {"cpvs nodes", s.node_bytes}, {"cpvs leaf masks", s.leaf_bytes}};
+  }
+
+ private:
+  explicit CpvsDecodedTile(std::span<const uint8_t> payload) : payload_(payload.begin(), payload.end()) {}
+  std::vector<uint8_t> payload_;
+  CpvsTileView view_;
+};
+
+}  // namespace
+
+Result<std::shared_ptr<const DecodedTile>> decode_cpvs_tile(std::span<const uint8_t> payload) {
+  return CpvsDecodedTile::make(payload);
 }
 
 }  // namespace shadowtiles

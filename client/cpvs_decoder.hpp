@@ -1,5 +1,8 @@
-// CPVS decoder (DESIGN.md §8, seed 004): a tile's voxelized-shadow DAG, answering visibility at
-// (u, v, depth). Placeholder until the CPVS baseline lands (issue #7): every payload is refused.
+// CPVS decoder (DESIGN.md §8, seed 004): a tile's voxelized-shadow DAG as a DecodedTile, answering
+// visibility at (u, v, quantised depth) (lit), PCF by leaf-mask popcounts (lit_count), and as
+// value() the start depth of the column's first shadowed step (for reports only).
+// Errors: corrupt_data for a malformed payload, unsupported for another format version.
+// Safe on untrusted input (client/cpvs_tile_view.hpp validates everything at parse).
 #pragma once
 
 #include <cstdint>
@@ -10,7 +13,6 @@
 
 namespace shadowtiles {
 
-// Errors: corrupt_data for a malformed payload; unsupported while the decoder is not built.
 Result<std::shared_ptr<const DecodedTile>> decode_cpvs_tile(std::span<const uint8_t> payload);
 
 }  // namespace shadowtiles

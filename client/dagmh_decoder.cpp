@@ -69,6 +69,24 @@ constexpr std::array<uint8_t, 256> make_popcounts() {
   return t;
 }
 constexpr std::array<uint8_t, 256> kPopcount = make_popcounts();
+// Bit-parallel popcount: a few ALU ops, no table and no libgcc call (the build has no -mpopcnt).
+inline unsigned popcount64(uint64_t x) {
+  x = x - ((x >> 1) & 0x5555555555555555ULL);
+  x = (x & 0x3333333333333333ULL) + ((x >> 2) & 0x3333333333333333ULL);
+  x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0fULL;
+  return unsigned((x * 0x0101010101010101ULL) >> 56);
+}
+// Up to 8 little-endian bytes at p, never reading at or past `end` (missing bytes read as 0).
+inline uint64_t load_u64_before(const uint8_t* p, const uint8_t* end) {
+  uint64_t x = 0;
+  if (end - p >= 8) {
+    std::memcpy(&x, p, 8);
+    return x;
+  }
+  for (unsigned q = 0; p + q < end; ++q) x |= uint64_t(p[q]) << (8 * q);
+  return x;
+}
+inline uint64_t low_bits(unsigned n) { return n >= 64 ? ~uint64_t(0) : (uint64_t(1) << n) - 1; }
 // Set bits of a byte bitmap below bit `bit`.
 inline unsigned popcount_below(const uint8_t* bytes, unsigned bit) {
   unsigned n = 0, q = 0;
@@ -166,6 +184,13 @@ Result<DagMhTileView> DagMhTileView::parse(std::span<const uint8_t> payload, con
     t_values[t] = count;
     t_height[t] = uint8_t(height);
   }
+  // Treelets as 64-bit words for the lookups' rank (set bits before a node) by word popcounts.
+  view.treelet_words_per_ = unsigned((bits + 63) / 64);
+  view.treelet_words_.assign(size_t(treelet_count) * view.treelet_words_per_, 0);
+  for (uint32_t t = 0; t < treelet_count; ++t)
+    for (size_t q = 0; q < TB; ++q)
+      view.treelet_words_[size_t(t) * view.treelet_words_per_ + q / 8] |= uint64_t(view.treelets_[size_t(t) * TB + q])
+                                                                          << (8 * (q % 8));
 
   // DAG nodes tile their section in order; references point forward to node starts or to treelets.
   std::vector<uint32_t> starts;
@@ -177,6 +202,9 @@ Result<DagMhTileView> DagMhTileView::parse(std::span<const uint8_t> payload, con
     const size_t nb = F::node_bytes(mask, wr, wc);
     if (at + nb > dag_bytes) return corrupt("DAG node runs past its section");
     starts.push_back(uint32_t(at));
+    st.dag_mask_bytes += 2;
+    st.dag_ref_bytes += F::ref_children(mask) * wr;
+    st.dag_count_bytes += nb - 2 - F::ref_children(mask) * wr;
     at += nb;
   }
   st.dag_nodes = starts.size();
@@ -246,8 +274,11 @@ Result<DagMhTileView> DagMhTileView::parse(std::span<const uint8_t> payload, con
   if (root_height > L + 1) return corrupt("tree deeper than the tile's level count");
 
   // Chunks: offsets increasing from 0, each chunk exactly its computed size, all values finite.
+  view.chunk_offsets_.resize(chunk_count);
+  view.payload_end_ = h + payload.size();
   for (uint64_t c = 0; c < chunk_count; ++c) {
     const uint64_t begin = load_uint(view.chunk_table_ + c * wo, wo);
+    view.chunk_offsets_[c] = uint32_t(begin);
     const uint64_t end = c + 1 < chunk_count ? load_uint(view.chunk_table_ + (c + 1) * wo, wo) : chunk_bytes;
     if ((c == 0 && begin != 0) || end < begin || end > chunk_bytes) return corrupt("bad chunk offsets");
     const uint64_t size = end - begin;
@@ -259,6 +290,7 @@ Result<DagMhTileView> DagMhTileView::parse(std::span<const uint8_t> payload, con
     if (b == 0) {
       if (size != 5) return corrupt("bad chunk size");
       st.chunk_header_bytes += 5;
+      st.representative_bytes += 5;
       st.representative_values += n;
       continue;
     }
@@ -272,6 +304,8 @@ Result<DagMhTileView> DagMhTileView::parse(std::span<const uint8_t> payload, con
       for (unsigned i = 0; i < k; ++i)
         if (!std::isfinite(load_f32(p + 5 + bm + 4 * i))) return corrupt("non-finite value");
       st.chunk_header_bytes += 5 + bm;
+      st.representative_bytes += 5;
+      st.bitmap_bytes += bm;
       st.raw_value_bytes += 4 * uint64_t(k);
       st.raw_values += k;
     } else if (b <= F::kMaxQuantBits) {
@@ -283,6 +317,9 @@ Result<DagMhTileView> DagMhTileView::parse(std::span<const uint8_t> payload, con
           !std::isfinite(F::dequantize(cl, cf, (uint32_t(1) << b) - 1)))
         return corrupt("non-finite quantisation grid");
       st.chunk_header_bytes += 5 + bm + 8;
+      st.representative_bytes += 5;
+      st.bitmap_bytes += bm;
+      st.grid_bytes += 8;
       st.multiplier_bytes += data;
       st.quantized_values += k;
     } else {
@@ -351,15 +388,21 @@ void DagMhTileView::step(State& s, uint32_t u, uint32_t v) const {
 }
 
 uint32_t DagMhTileView::treelet_find(const State& s, uint32_t u, uint32_t v, unsigned stop) const {
-  const uint8_t* t = treelets_ + size_t(s.ref) * treelet_bytes_;
+  const uint64_t* t = treelet_words_.data() + size_t(s.ref) * treelet_words_per_;
   const unsigned d = std::min(H_ - 1, stop - s.level);
   uint32_t idx[F::kMaxTreeletHeight];
   idx[0] = 0;
   for (unsigned n = 0; n < d; ++n)
     idx[n + 1] = idx[n] + 1 + child_index(u, v, levels_ - 1 - (s.level + n)) * F::complete_nodes(H_ - 1 - n);
   // Finest level first: the deepest valued node on the path wins.
-  for (unsigned n = d + 1; n-- > 0;)
-    if ((t[idx[n] / 8] >> (idx[n] % 8)) & 1u) return s.count + popcount_below(t, idx[n]);
+  for (unsigned n = d + 1; n-- > 0;) {
+    const uint32_t bit = idx[n];
+    if ((t[bit / 64] >> (bit % 64)) & 1u) {
+      unsigned rank = popcount64(t[bit / 64] & low_bits(bit % 64));
+      for (unsigned w = 0; w < bit / 64; ++w) rank += popcount64(t[w]);
+      return s.count + rank;
+    }
+  }
   return s.last;
 }
 
@@ -373,21 +416,23 @@ float DagMhTileView::value_at(uint32_t index) const {
   if (chunks_ == nullptr) return 1.0f;  // default-constructed view
   if (index >= value_count_) index = value_count_ - 1;
   const uint32_t c = index / chunk_size_, j = index % chunk_size_;
-  const uint8_t* p = chunks_ + load_uint(chunk_table_ + size_t(c) * wo_, wo_);
+  const uint8_t* p = chunks_ + chunk_offsets_[c];
   const float rep = load_f32(p);
   const unsigned b = p[4];
   if (b == 0 || ((p[5 + j / 8] >> (j % 8)) & 1u) == 0) return rep;
   const unsigned n = std::min(chunk_size_, value_count_ - c * chunk_size_);
   const size_t bm = F::bitmap_bytes(n);
-  const unsigned rank = popcount_below(p + 5, j);
+  // Rank of value j among the differing ones: word popcounts (bits past j are masked off; reads
+  // stop at the payload's end).
+  const uint8_t* bitmap = p + 5;
+  unsigned rank = popcount64(load_u64_before(bitmap + 8 * (j / 64), payload_end_) & low_bits(j % 64));
+  for (unsigned w = 0; w < j / 64; ++w) rank += popcount64(load_u64_before(bitmap + 8 * w, payload_end_));
   if (b == F::kRawBits) return load_f32(p + 5 + bm + 4 * size_t(rank));
   const float cl = load_f32(p + 5 + bm), cf = load_f32(p + 5 + bm + 4);
   const uint8_t* data = p + 5 + bm + 8;
   const uint64_t bit = uint64_t(rank) * b;
-  // Only the bytes holding the multiplier: never past the chunk.
-  const unsigned nbytes = unsigned((bit % 8 + b + 7) / 8);
-  uint64_t acc = 0;
-  for (unsigned q = 0; q < nbytes; ++q) acc |= uint64_t(data[bit / 8 + q]) << (8 * q);
+  // b <= 24 and bit % 8 < 8: the multiplier lies within the 8 bytes from bit / 8.
+  const uint64_t acc = load_u64_before(data + bit / 8, payload_end_);
   const uint32_t m = uint32_t((acc >> (bit % 8)) & ((uint64_t(1) << b) - 1));
   return F::dequantize(cl, cf, m);
 }
@@ -415,11 +460,24 @@ uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uin
   while (s.kind == kDag && s.level < lca) step(s, u0, v0);
   // The walk ended at or above the common ancestor: one value decides the whole box.
   if (s.kind == kDone) return depth <= value_at(s.last) + bias ? kw * kh : 0;
-  uint32_t lit = 0, cached_index = UINT32_MAX;
+  // Last-node cache: path[l] is the previous sample's state at level l (lca <= l <= end); each sample
+  // resumes from the deepest level it shares with the previous one.
+  State path[F::kMaxLevels + 1];
+  path[s.level] = s;
+  unsigned end = s.level;
+  uint32_t lit = 0, cached_index = UINT32_MAX, pu = u0, pv = v0;
   float cached_value = 0;
   for (uint32_t v = v0; v <= v1; ++v)
     for (uint32_t u = u0; u <= u1; ++u) {
-      const uint32_t index = resolve(s, u, v, L);
+      const unsigned shared = L - unsigned(std::bit_width((u ^ pu) | (v ^ pv)));
+      State c = path[std::min(shared, end)];
+      while (c.kind == kDag && c.level < L) {
+        step(c, u, v);
+        if (c.kind != kDone) path[c.level] = c;
+      }
+      end = c.level;
+      pu = u, pv = v;
+      const uint32_t index = c.kind == kTreelet ? treelet_find(c, u, v, L) : c.last;
       if (index != cached_index) cached_index = index, cached_value = value_at(index);
       lit += depth <= cached_value + bias;
     }

@@ -39,9 +39,13 @@ struct DagMhStats {
   uint64_t payload_bytes = 0;
   uint64_t header_bytes = 0;
   uint64_t dag_bytes = 0, dag_nodes = 0;
+  uint64_t dag_mask_bytes = 0, dag_ref_bytes = 0, dag_count_bytes = 0;  // parts of dag_bytes
   uint64_t treelet_bytes = 0, treelets = 0;
   uint64_t chunk_table_bytes = 0;   // chunk offsets
-  uint64_t chunk_header_bytes = 0;  // representative, b, bitmap, c_l, c_f
+  uint64_t chunk_header_bytes = 0;  // representative, b, bitmap, c_l, c_f (the three below)
+  uint64_t representative_bytes = 0;  // f32 representative + u8 b per chunk
+  uint64_t bitmap_bytes = 0;          // which values differ from the representative
+  uint64_t grid_bytes = 0;            // c_l, c_f of quantised chunks
   uint64_t multiplier_bytes = 0, raw_value_bytes = 0;
   uint64_t values = 0, chunks = 0;
   uint64_t representative_values = 0, quantized_values = 0, raw_values = 0;
@@ -56,6 +60,11 @@ class DagMhTileView {
   uint32_t size() const { return size_; }
   unsigned levels() const { return levels_; }
   const DagMhStats& stats() const { return stats_; }
+  // Bytes the view holds beside the payload (skip list, treelet words, chunk offsets).
+  size_t derived_bytes() const {
+    return skip_.size() * sizeof(State) + treelet_words_.size() * sizeof(uint64_t) +
+           chunk_offsets_.size() * sizeof(uint32_t);
+  }
 
   // Value of texel (u, v) walking at most down to `max_level` (0 = root; levels() or more = full
   // resolution). Preconditions: u, v < size() (asserted; masked in release builds).
@@ -96,6 +105,11 @@ class DagMhTileView {
   uint32_t value_count_ = 0;
   unsigned skip_level_ = 0;
   std::vector<State> skip_;
+  // Derived at parse, for speed: treelet bitmaps as 64-bit words, chunk offsets at full width.
+  unsigned treelet_words_per_ = 1;
+  std::vector<uint64_t> treelet_words_;
+  std::vector<uint32_t> chunk_offsets_;
+  const uint8_t* payload_end_ = nullptr;
   DagMhStats stats_;
 };
 

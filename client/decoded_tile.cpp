@@ -38,6 +38,27 @@ class MhDecodedTile final : public DecodedTile {
   uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const override {
     return view_.pcf_lit_count(u0, v0, kw, kh, threshold, 0.0f);
   }
+  // SBE16a-style parts: header (root value included), embedded skip list, one record (mask +
+  // block offset) per stored node with children, one float per stored valued node but the root.
+  std::vector<SizePart> size_breakdown() const override {
+    const MhStats& st = view_.stats();
+    const bool root_has_children = st.stream_bytes > 0;  // a leaf root has no node stream
+    const uint64_t record = 1 + st.offset_width;
+    const uint64_t inner_records = st.inner_nodes - (root_has_children ? 1 : 0);  // the root's is the header's
+    const uint64_t inner_values = inner_records;
+    const uint64_t leaf_values = st.leaf_nodes - (root_has_children ? 0 : 1);
+    std::vector<SizePart> parts{{"header", st.header_bytes},
+                                {"skip list", st.skip_list_bytes},
+                                {"inner node records", inner_records * record},
+                                {"empty node records", st.empty_nodes * record},
+                                {"inner node values", inner_values * 4},
+                                {"leaf values", leaf_values * 4}};
+    uint64_t counted = 0;
+    for (const SizePart& p : parts) counted += p.bytes;
+    // Nothing else is in the format; a remainder would mean these counts drifted from it.
+    if (counted != st.payload_bytes) parts.push_back({"unaccounted", st.payload_bytes - counted});
+    return parts;
+  }
   const MhTileView& view() const { return view_; }
 
  private:
@@ -60,9 +81,24 @@ class DagMhDecodedTile final : public DecodedTile {
   float value(uint32_t u, uint32_t v, unsigned max_level) const override {
     return view_.lookup(u, v, max_level == 255 ? kDagMhAllLevels : max_level);
   }
-  size_t memory_bytes() const override { return payload_.size() + sizeof(*this); }
+  size_t memory_bytes() const override { return payload_.size() + sizeof(*this) + view_.derived_bytes(); }
   uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const override {
     return view_.pcf_lit_count(u0, v0, kw, kh, threshold, 0.0f);
+  }
+  // SE21 Tables 3 and 4: topology (DAG nodes, treelets) against values (chunk parts).
+  std::vector<SizePart> size_breakdown() const override {
+    const DagMhStats& st = view_.stats();
+    return {{"header", st.header_bytes},
+            {"DAG node masks", st.dag_mask_bytes},
+            {"DAG node refs", st.dag_ref_bytes},
+            {"DAG node value counts", st.dag_count_bytes},
+            {"treelets", st.treelet_bytes},
+            {"chunk offsets", st.chunk_table_bytes},
+            {"chunk representatives", st.representative_bytes},
+            {"difference bitmaps", st.bitmap_bytes},
+            {"grid constants", st.grid_bytes},
+            {"multipliers", st.multiplier_bytes},
+            {"raw float values", st.raw_value_bytes}};
   }
 
  private:

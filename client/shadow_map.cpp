@@ -132,6 +132,10 @@ Status check_query(const Vec3& world, double bias_world) {
 
 }  // namespace
 
+float ShadowMap::biased_depth(double depth, double bias_world) const {
+  return float(depth - frame_.depth_from_world(bias_world));
+}
+
 Result<unsigned> ShadowMap::tile_max_level(std::optional<unsigned> level) const {
   if (!level) return 255u;
   if (*level >= level_count())
@@ -176,7 +180,7 @@ Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, uns
     return 1.0;
   }
   const int64_t cu = int64_t(answer.light.u), cv = int64_t(answer.light.v), half = kernel / 2;
-  const float threshold = float(answer.light.depth - frame_.depth_from_world(bias_world));
+  const float threshold = biased_depth(answer.light.depth, bias_world);
   const int64_t size = layout_.tile_size();
   const int64_t side = int64_t(layout_.resolution());
   // The kernel box, clipped to the map (samples outside are lit), split into its parts per tile.
@@ -237,7 +241,7 @@ Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, s
                         std::string("method '") + store::method_name(method) + "' is not in this store");
     if (auto coarse = top_value(method, u, v, *level)) {
       answer.value = *coarse;
-      answer.lit = float(answer.light.depth - frame_.depth_from_world(bias_world)) <= answer.value;
+      answer.lit = biased_depth(answer.light.depth, bias_world) <= answer.value;
       return answer;
     }
   }
@@ -250,7 +254,7 @@ Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, s
   }
   answer.value = (*decoded)->value(u % size, v % size, max_level);
   // Same comparison as query_pcf, so a 1x1 kernel equals a point query exactly.
-  const float threshold = float(answer.light.depth - frame_.depth_from_world(bias_world));
+  const float threshold = biased_depth(answer.light.depth, bias_world);
   answer.lit = (*decoded)->lit(u % size, v % size, threshold, max_level);
   return answer;
 }

@@ -106,6 +106,8 @@ class ShadowMap {
   // when it falls off the map. Also returns the max level inside a tile tree for `level`.
   Result<std::pair<ShadowAnswer, unsigned>> locate(const Vec3& world, double bias_world,
                                                    std::optional<unsigned> level) const;
+  // The receiver's depth minus the bias, as compared with stored values.
+  float biased_depth(double depth, double bias_world) const;
   // Query level -> max level inside a tile tree (255 = finest).
   Result<unsigned> tile_max_level(std::optional<unsigned> level) const;
 

@@ -1,5 +1,5 @@
-// SST decoder (DESIGN.md §8, seed 002): a tile's sparse shadow tree forest of plane-fit quadtrees.
-// Placeholder until the SST baseline lands (issue #7): every payload is refused.
+// SST decoder (DESIGN.md §8, seed 002): a tile's sparse shadow tree forest of plane-fit quadtrees
+// (client/sst_format.hpp) as a DecodedTile: owns the payload, reads it through SstTileView.
 #pragma once
 
 #include <cstdint>
@@ -10,7 +10,8 @@
 
 namespace shadowtiles {
 
-// Errors: corrupt_data for a malformed payload; unsupported while the decoder is not built.
+// Errors: corrupt_data for a malformed payload; unsupported for a newer format version.
+// Safe on untrusted input (the whole payload is validated before the tile is returned).
 Result<std::shared_ptr<const DecodedTile>> decode_sst_tile(std::span<const uint8_t> payload);
 
 }  // namespace shadowtiles

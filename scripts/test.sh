@@ -5,4 +5,5 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 bash scripts/build.sh
-ctest --test-dir build --output-on-failure -j 2 --timeout 900
+# Long variants (label `long`: every scene at high resolution) run with `ctest --test-dir build -L long`.
+ctest --test-dir build --output-on-failure -j 2 --timeout 900 -LE long

@@ -1,0 +1,118 @@
+// SST beside MH on synthetic tiles: encode time and payload size (counters), parse rate, lookup
+// rates (point row order / random, PCF 3x3 and 5x5 random; 1 and 2 threads).
+//   build-release/bench/bench_sst --benchmark_filter=Lookup
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <random>
+
+#include "builder/mh_builder.hpp"
+#include "builder/mh_encoder.hpp"
+#include "builder/mh_synthetic.hpp"
+#include "builder/sst_encoder.hpp"
+#include "client/mh_decoder.hpp"
+#include "client/sst_tile_view.hpp"
+
+namespace st = shadowtiles;
+
+namespace {
+
+const st::MhSyntheticKind kKinds[] = {st::MhSyntheticKind::steps, st::MhSyntheticKind::closed_plane,
+                                      st::MhSyntheticKind::noisy_plane, st::MhSyntheticKind::random_intervals};
+
+const st::TileIntervals& tile(int kind, uint32_t size) {
+  static std::mutex mutex;
+  static std::map<std::pair<int, uint32_t>, std::unique_ptr<st::TileIntervals>> cache;
+  std::lock_guard lock(mutex);
+  auto& slot = cache[{kind, size}];
+  if (!slot) slot = std::make_unique<st::TileIntervals>(st::make_synthetic_tile(kKinds[kind], size, 42));
+  return *slot;
+}
+
+struct Encoded {
+  std::vector<uint8_t> sst_bytes, mh_bytes;
+  st::SstTileView sst;
+  st::MhTileView mh;
+};
+const Encoded& encoded(int kind, uint32_t size) {
+  static std::mutex mutex;
+  static std::map<std::pair<int, uint32_t>, std::unique_ptr<Encoded>> cache;
+  std::lock_guard lock(mutex);
+  auto& slot = cache[{kind, size}];
+  if (!slot) {
+    slot = std::make_unique<Encoded>();
+    slot->sst_bytes = *st::encode_sst_tile(tile(kind, size));
+    slot->sst = *st::SstTileView::parse(slot->sst_bytes);
+    slot->mh_bytes = *st::encode_mh(*st::build_mh(tile(kind, size)));
+    slot->mh = *st::MhTileView::parse(slot->mh_bytes);
+  }
+  return *slot;
+}
+
+void BM_SstEncode(benchmark::State& state) {
+  const int kind = int(state.range(0));
+  const uint32_t size = uint32_t(state.range(1));
+  const st::TileIntervals& t = tile(kind, size);
+  for (auto _ : state) benchmark::DoNotOptimize(st::encode_sst_tile(t));
+  const Encoded& e = encoded(kind, size);
+  const st::SstStats& s = e.sst.stats();
+  state.SetLabel(st::synthetic_kind_name(kKinds[kind]));
+  state.counters["raw_B"] = double(size) * size * 4;
+  state.counters["sst_B"] = double(e.sst_bytes.size());
+  state.counters["mh_B"] = double(e.mh_bytes.size());
+  state.counters["plane_texel_share"] = double(s.plane_texels) / (double(size) * size);
+  state.counters["dense_texel_share"] = double(s.dense_texels) / (double(size) * size);
+  state.counters["texels/s"] = benchmark::Counter(double(size) * size, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+void BM_SstParse(benchmark::State& state) {
+  const Encoded& e = encoded(int(state.range(0)), uint32_t(state.range(1)));
+  for (auto _ : state) benchmark::DoNotOptimize(st::SstTileView::parse(e.sst_bytes));
+  state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(e.sst_bytes.size()));
+  state.SetLabel(st::synthetic_kind_name(kKinds[state.range(0)]));
+}
+
+// range: kind, size, method (0 SST, 1 MH), mode (0 point row order, 1 point random, 3 / 5 PCF k random).
+void BM_Lookup(benchmark::State& state) {
+  const uint32_t size = uint32_t(state.range(1));
+  const Encoded& e = encoded(int(state.range(0)), size);
+  const bool sst = state.range(2) == 0;
+  const int mode = int(state.range(3));
+  std::mt19937 rng(unsigned(state.thread_index()) + 1);
+  std::vector<uint32_t> coords(1 << 16);
+  for (auto& c : coords) c = rng();
+  const uint32_t k = mode >= 3 ? uint32_t(mode) : 1;
+  uint64_t n = 0, i = 0, row = 0;
+  float sum = 0;
+  auto point = [&](uint32_t u, uint32_t v) { return sst ? e.sst.lookup(u, v) : e.mh.lookup(u, v); };
+  auto pcf = [&](uint32_t u, uint32_t v) {
+    return sst ? float(e.sst.lit_count(u, v, k, k, 0.5f)) : float(e.mh.pcf_lit_count(u, v, k, k, 0.5f, 0.0f));
+  };
+  for (auto _ : state) {
+    if (mode == 0) {
+      const uint32_t v = uint32_t(row++ % size);
+      for (uint32_t u = 0; u < size; ++u) sum += point(u, v);
+      n += size;
+    } else {
+      for (int j = 0; j < 1024; ++j, i += 2) {
+        const uint32_t u = coords[i & 0xffff] % (size - k + 1), v = coords[(i + 1) & 0xffff] % (size - k + 1);
+        sum += mode == 1 ? point(u, v) : pcf(u, v);
+      }
+      n += 1024;
+    }
+  }
+  benchmark::DoNotOptimize(sum);
+  state.counters["lookups/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
+  static const char* modes[] = {"point row-order", "point random", "", "pcf3 random", "", "pcf5 random"};
+  state.SetLabel(std::string(st::synthetic_kind_name(kKinds[state.range(0)])) + (sst ? " sst " : " mh ") +
+                 modes[mode]);
+}
+
+}  // namespace
+
+BENCHMARK(BM_SstEncode)->ArgsProduct({{0, 1, 2, 3}, {1024, 4096}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SstParse)->ArgsProduct({{0, 1, 3}, {4096}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Lookup)->ArgsProduct({{0, 1, 3}, {4096}, {0, 1}, {0, 1, 3, 5}})->Threads(1)->Threads(2);
+BENCHMARK_MAIN();

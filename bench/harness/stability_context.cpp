@@ -1,0 +1,67 @@
+#include <spdlog/spdlog.h>
+
+#include "bench/harness/accuracy_eval.hpp"
+#include "bench/harness/stability_scenarios.hpp"
+
+namespace shadowtiles::bench {
+
+void ScenarioResult::check(const std::string& name, bool ok, const std::string& detail) {
+  checks.push_back({name, ok, detail});
+  if (!ok) spdlog::warn("  check failed: {}: {}", name, detail);
+}
+
+bool ScenarioResult::passed() const {
+  for (const StabilityCheck& c : checks)
+    if (!c.passed) return false;
+  return true;
+}
+
+StabilityContext::StabilityContext(StabilityOptions options) : options_(std::move(options)) {}
+
+Status StabilityContext::init() {
+  auto device = EmbreeDevice::create();
+  if (!device) return device.error();
+  device_ = std::make_unique<EmbreeDevice>(std::move(*device));
+  std::error_code ec;
+  std::filesystem::create_directories(options_.work_dir, ec);
+  if (ec) return make_error(ErrorCode::io_error, "cannot create " + options_.work_dir.string() + ": " + ec.message());
+  return {};
+}
+
+Result<const StabilityContext::LoadedScene*> StabilityContext::scene(const std::filesystem::path& file,
+                                                                     const LoadOptions& load) {
+  std::string key = file.string();
+  for (const std::string& h : load.heightfield_meshes) key += "|" + h;
+  auto found = scenes_.find(key);
+  if (found != scenes_.end()) return found->second.get();
+  auto loaded = load_scene(file, load);
+  if (!loaded) return loaded.error();
+  auto entry = std::make_unique<LoadedScene>();
+  entry->file = file;
+  entry->load = load;
+  entry->scene = std::move(*loaded);
+  entry->receivers = sample_receivers(entry->scene, options_.receivers, options_.seed);
+  const LoadedScene* pointer = entry.get();
+  scenes_[key] = std::move(entry);
+  return pointer;
+}
+
+Result<std::vector<StabilityRow>> StabilityContext::measure(const LoadedScene& scene, MeasureSpec spec) {
+  spec.scene_file = scene.file;
+  spec.load = scene.load;
+  GroundTruth truth(*device_, scene.scene, spec.light);
+  const std::vector<uint8_t> lit = point_truth(truth, scene.receivers);
+  return measure_build(spec, scene.receivers, lit, options_.work_dir);
+}
+
+const std::vector<ScenarioEntry>& all_scenarios() {
+  static const std::vector<ScenarioEntry> entries{
+      {"open_geometry", run_open_geometry},       {"thin_walls", run_thin_walls},
+      {"grazing_sun", run_grazing_sun},           {"tile_seams", run_tile_seams},
+      {"precision", run_precision},               {"resolution_sweep", run_resolution_sweep},
+      {"degenerate_input", run_degenerate_input}, {"hash_collisions", run_hash_collisions},
+  };
+  return entries;
+}
+
+}  // namespace shadowtiles::bench

@@ -1,0 +1,73 @@
+// Long (ctest label `long`, not run in the default CI suite): issue #7's exhaustive check. Every
+// shared scene at 4096^2 (tiles of 1024^2) built with SST beside MH: every texel of the map decodes
+// inside its recomputed [lower, upper] interval and answers a depth just outside it exactly.
+// ~1 min per scene on 2 cores.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "builder/build_job.hpp"
+#include "builder/scene_loader.hpp"
+#include "builder/store_verifier.hpp"
+#include "client/shadow_map.hpp"
+#include "tests/testing_support.hpp"
+
+namespace shadowtiles {
+namespace {
+
+struct SceneCase {
+  const char* file;
+  UpAxis up;
+  bool heightfield;
+  double sun_elevation;
+};
+
+class SstAllScenesAt4096 : public ::testing::TestWithParam<SceneCase> {};
+
+TEST_P(SstAllScenesAt4096, EveryTexelInsideItsInterval) {
+  const SceneCase& scene = GetParam();
+  constexpr uint32_t kResolution = 4096, kTile = 1024;
+  const std::vector<store::Method> methods{store::Method::mh, store::Method::sst};
+  testing::TempDir dir;
+  BuildConfig config;
+  config.scene_path = testing::shared_scene(scene.file);
+  config.store_path = dir.path() / "s";
+  config.resolution = kResolution;
+  config.tile_size = kTile;
+  config.load.up = scene.up;
+  if (scene.heightfield) config.load.heightfield_meshes = {"*"};
+  config.light_direction = *light_direction_from_sun(135, scene.sun_elevation, scene.up);
+  config.methods = methods;
+  auto summary = run_build(config);
+  ASSERT_TRUE(summary.ok()) << summary.error().message;
+  auto map = ShadowMap::open(config.store_path);
+  ASSERT_TRUE(map.ok()) << map.error().message;
+  LoadOptions load;
+  load.up = scene.up;
+  load.heightfield_meshes = (*map)->meta().heightfield_meshes;
+  auto loaded = load_scene(config.scene_path, load);
+  ASSERT_TRUE(loaded.ok());
+  auto report = verify_store(**map, *loaded, methods);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  const MethodVerification& v = report->methods.at(store::Method::sst);
+  EXPECT_EQ(v.texels, uint64_t(kResolution) * kResolution);
+  EXPECT_EQ(v.outside, 0u) << v.first_violation;
+  EXPECT_EQ(v.wrong_answers, 0u);
+  const auto& bytes = summary->stats["bytes_by_method"];
+  std::printf("[ figures  ] %s 4096^2: sst %llu bytes, mh %llu bytes, %llu texels checked\n", scene.file,
+              (unsigned long long)bytes["sst"].get<uint64_t>(), (unsigned long long)bytes["mh"].get<uint64_t>(),
+              (unsigned long long)v.texels);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    SharedScenes, SstAllScenesAt4096,
+    ::testing::Values(SceneCase{"bunny/stanford-bunny.obj", UpAxis::y, false, 45},
+                      SceneCase{"nefertiti/nefertiti.obj", UpAxis::z, false, 45},
+                      SceneCase{"fzk_haus/fzk_haus.obj", UpAxis::y, false, 45},
+                      SceneCase{"dragon_res2/dragon_vrip_res2.ply", UpAxis::y, false, 45},
+                      SceneCase{"terragen/RealisticTerrain.ply", UpAxis::z, true, 30},
+                      SceneCase{"oahu/oahu_w158n21.ply", UpAxis::z, true, 30},
+                      SceneCase{"honolulu_airport/honolulu_airport_harbour.ply", UpAxis::z, false, 30}));
+
+}  // namespace
+}  // namespace shadowtiles
