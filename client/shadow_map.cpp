@@ -1,6 +1,7 @@
 #include "client/shadow_map.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 
@@ -49,18 +50,51 @@ Result<std::unique_ptr<ShadowMap>> ShadowMap::open(std::shared_ptr<const TileSou
   return map;
 }
 
+namespace {
+
+// The last tile each thread looked up, by map id (ids are never reused, so a destroyed map's entry
+// never matches a new map at the same address). Hits here are counted locally and added to the
+// shared stats at the next locked lookup.
+struct LastTile {
+  uint64_t map_id = 0;
+  store::TileKey key{};
+  std::shared_ptr<const DecodedTile> tile;
+  uint64_t unreported_hits = 0;
+};
+thread_local LastTile t_last_tile;
+
+}  // namespace
+
+uint64_t ShadowMap::next_id() {
+  static std::atomic<uint64_t> next{1};
+  return next.fetch_add(1, std::memory_order_relaxed);
+}
+
 Result<std::shared_ptr<const DecodedTile>> ShadowMap::tile(store::Method method, TileCoord coord) const {
   if (!meta_.has_method(method))
     return make_error(ErrorCode::unsupported,
                       std::string("method '") + store::method_name(method) + "' is not in this store");
   if (!layout_.contains(coord)) return make_error(ErrorCode::invalid_input, "tile outside the map");
   store::TileKey key{method, layout_.tile_level(), coord.x, coord.y};
+  LastTile& last = t_last_tile;
+  if (last.map_id == id_ && last.key == key) {
+    ++last.unreported_hits;
+    return last.tile;
+  }
+  auto remember = [&](std::shared_ptr<const DecodedTile> tile) {
+    last.map_id = id_;
+    last.key = key;
+    last.tile = tile;
+    return tile;
+  };
   {
     std::lock_guard lock(cache_mutex_);
+    if (last.map_id == id_) stats_.hits += last.unreported_hits;
+    last.unreported_hits = 0;
     if (auto it = cache_.find(key); it != cache_.end()) {
       lru_.splice(lru_.begin(), lru_, it->second.lru);
       ++stats_.hits;
-      return it->second.tile;
+      return remember(it->second.tile);
     }
     ++stats_.misses;
   }
@@ -83,7 +117,7 @@ Result<std::shared_ptr<const DecodedTile>> ShadowMap::tile(store::Method method,
     decoded = std::move(*tile);
   }
   std::lock_guard lock(cache_mutex_);
-  if (auto it = cache_.find(key); it != cache_.end()) return it->second.tile;  // raced: keep the first
+  if (auto it = cache_.find(key); it != cache_.end()) return remember(it->second.tile);  // raced: keep the first
   size_t bytes = decoded ? decoded->memory_bytes() : 0;
   lru_.push_front(key);
   cache_[key] = CacheEntry{decoded, bytes, lru_.begin()};
@@ -94,7 +128,7 @@ Result<std::shared_ptr<const DecodedTile>> ShadowMap::tile(store::Method method,
     cache_.erase(victim);
     lru_.pop_back();
   }
-  return decoded;
+  return remember(decoded);
 }
 
 Status ShadowMap::prefetch(store::Method method, std::span<const TileCoord> tiles) const {

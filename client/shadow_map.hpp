@@ -5,7 +5,9 @@
 // fails its checks is an error, never an answer.
 // Points outside the map are lit and flagged; absent tiles of a complete build are empty (lit).
 // Thread safety: all methods may be called concurrently (the cache is locked; decoding runs
-// outside the lock).
+// outside the lock). Each thread also remembers the last tile it used, so runs of lookups in one
+// tile (coherent queries, PCF kernels) take no lock; that tile stays alive while the thread holds it,
+// so the cache may exceed its budget by one tile per querying thread.
 #pragma once
 
 #include <cstdint>
@@ -100,7 +102,9 @@ class ShadowMap {
         meta_(std::move(meta)),
         frame_(frame),
         layout_(layout),
-        options_(options) {}
+        options_(options),
+        id_(next_id()) {}
+  static uint64_t next_id();
 
   // Validates a query and maps the point to light space; the answer is flagged outside_map (lit)
   // when it falls off the map. Also returns the max level inside a tile tree for `level`.
@@ -132,6 +136,7 @@ class ShadowMap {
   mutable std::map<store::TileKey, CacheEntry> cache_;
   mutable std::list<store::TileKey> lru_;  // front = most recent
   mutable CacheStats stats_;
+  const uint64_t id_;  // tells this map's entries in the per-thread last-tile memory from another's
 };
 
 }  // namespace shadowtiles
