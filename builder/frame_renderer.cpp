@@ -5,6 +5,8 @@
 #include <limits>
 #include <thread>
 
+#include "builder/embree_world_scene.hpp"
+
 namespace shadowtiles {
 
 uint64_t FrameHits::hit_count() const {
@@ -12,25 +14,8 @@ uint64_t FrameHits::hit_count() const {
 }
 
 FrameRenderer::FrameRenderer(const EmbreeDevice& device, const Scene& scene) : scene_(rtcNewScene(device.get())) {
-  for (int i = 0; i < 3; ++i) centre_[i] = 0.5 * (scene.bounds.min[i] + scene.bounds.max[i]);
-  rtcSetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST);
-  if (!scene.triangles.empty()) {
-    RTCGeometry geometry = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                                 RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                                 scene.vertices.size()));
-    for (size_t v = 0; v < scene.vertices.size(); ++v)
-      for (int i = 0; i < 3; ++i) vertices[3 * v + i] = float(scene.vertices[v][i] - centre_[i]);
-    auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0,
-                                                                   RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
-                                                                   scene.triangles.size()));
-    for (size_t t = 0; t < scene.triangles.size(); ++t)
-      for (int i = 0; i < 3; ++i) indices[3 * t + i] = scene.triangles[t][i];
-    rtcCommitGeometry(geometry);
-    rtcAttachGeometry(scene_.get(), geometry);
-    rtcReleaseGeometry(geometry);
-  }
-  rtcCommitScene(scene_.get());
+  centre_ = scene_centre(scene);
+  commit_world_triangles(device, scene_, scene, centre_);
 }
 
 Result<FrameHits> FrameRenderer::trace(const CameraView& camera, unsigned threads) const {

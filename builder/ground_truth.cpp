@@ -3,11 +3,13 @@
 #include <cmath>
 #include <limits>
 
+#include "builder/embree_world_scene.hpp"
+
 namespace shadowtiles {
 
 GroundTruth::GroundTruth(const EmbreeDevice& device, const Scene& scene, const Vec3& light_direction)
     : scene_(rtcNewScene(device.get())) {
-  for (int i = 0; i < 3; ++i) centre_[i] = 0.5 * (scene.bounds.min[i] + scene.bounds.max[i]);
+  centre_ = scene_centre(scene);
   double length = std::sqrt(light_direction[0] * light_direction[0] + light_direction[1] * light_direction[1] +
                             light_direction[2] * light_direction[2]);
   for (int i = 0; i < 3; ++i) to_sun_[i] = -light_direction[i] / length;
@@ -15,24 +17,7 @@ GroundTruth::GroundTruth(const EmbreeDevice& device, const Scene& scene, const V
   for (int i = 0; i < 3; ++i) diagonal += std::pow(scene.bounds.max[i] - scene.bounds.min[i], 2);
   epsilon_ = 1e-5 * std::sqrt(diagonal);
 
-  rtcSetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST);
-  if (!scene.triangles.empty()) {
-    RTCGeometry geometry = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                                 RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                                 scene.vertices.size()));
-    for (size_t v = 0; v < scene.vertices.size(); ++v)
-      for (int i = 0; i < 3; ++i) vertices[3 * v + i] = float(scene.vertices[v][i] - centre_[i]);
-    auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0,
-                                                                   RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
-                                                                   scene.triangles.size()));
-    for (size_t t = 0; t < scene.triangles.size(); ++t)
-      for (int i = 0; i < 3; ++i) indices[3 * t + i] = scene.triangles[t][i];
-    rtcCommitGeometry(geometry);
-    rtcAttachGeometry(scene_.get(), geometry);
-    rtcReleaseGeometry(geometry);
-  }
-  rtcCommitScene(scene_.get());
+  commit_world_triangles(device, scene_, scene, centre_);
 }
 
 bool GroundTruth::lit(const Vec3& world) const {
