@@ -3,6 +3,7 @@
 #include <sys/resource.h>
 #include <xxhash.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -158,7 +159,10 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
     if (!fitted) return fitted.error();
     resolution = *fitted;
   }
-  auto frame = LightFrame::fit(config.light_direction, scene->bounds, resolution);
+  // The far margin keeps every surface well short of depth 1 for any bias up to the exit margin, so
+  // receivers beyond the far plane can be answered as if on it (see LightFrame::fit).
+  auto frame = LightFrame::fit(config.light_direction, scene->bounds, resolution,
+                               std::max(LightFrame::kDefaultFarMarginTexels, 4 * config.exit_margin_texels));
   if (!frame) return frame.error();
   auto layout = TileLayout::make(resolution, config.tile_size);
   if (!layout) return layout.error();

@@ -7,6 +7,8 @@
 #include <limits>
 #include <vector>
 
+#include "builder/receiver_surface_caps.hpp"
+
 namespace shadowtiles {
 namespace {
 
@@ -67,9 +69,38 @@ void collect_closed_hits(const RTCFilterFunctionNArguments* args) {
   }
 }
 
+// A triangle's depth as a function of global texel coordinates, from the scene's double light-space
+// vertices. Embree's hit distance is computed from the tile-local float BVH, so its rounding depends
+// on where the tile starts; re-evaluating each hit here makes stored depths identical under any
+// tiling (the ray and the triangle hit are the same, only the arithmetic is global).
+struct DepthPlane {
+  double u = 0, v = 0, depth = 0;  // anchor vertex
+  double du = 0, dv = 0;           // depth change per texel along u and v
+  double lowest = 0, highest = 0;  // the vertices' depth range: a hit is never outside it
+  bool edge_on = true;             // parallel to the light: no plane to evaluate, keep Embree's depth
+
+  static DepthPlane of(const LightSpacePoint& a, const LightSpacePoint& b, const LightSpacePoint& c) {
+    DepthPlane plane;
+    const double nx = (b.v - a.v) * (c.depth - a.depth) - (b.depth - a.depth) * (c.v - a.v);
+    const double ny = (b.depth - a.depth) * (c.u - a.u) - (b.u - a.u) * (c.depth - a.depth);
+    const double nz = (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
+    plane.lowest = std::min({a.depth, b.depth, c.depth});
+    plane.highest = std::max({a.depth, b.depth, c.depth});
+    if (nz == 0) return plane;
+    plane = {a.u, a.v, a.depth, -nx / nz, -ny / nz, plane.lowest, plane.highest, false};
+    return plane;
+  }
+  // Depth at global texel coordinates (u, v); `embree_depth` where the triangle is edge-on.
+  float at(double u, double v, float embree_depth) const {
+    if (edge_on) return embree_depth;
+    return float(std::clamp(depth + du * (u - this->u) + dv * (v - this->v), lowest, highest));
+  }
+};
+
 struct TileGeometry {
   std::vector<float> closed_vertices, open_vertices;    // xyz per vertex, 3 vertices per triangle
   ClosedGeometryData closed;                            // closed meshes and heightfields
+  std::vector<DepthPlane> closed_planes, open_planes;   // by Embree primitive id
   size_t open_count = 0;
 };
 
@@ -103,10 +134,12 @@ TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile) 
       geometry.closed.front.push_back(faces_light(a, b, c) ? 1 : 0);
       geometry.closed.heightfield.push_back(kind == MeshKind::heightfield ? 1 : 0);
       geometry.closed.slack.push_back(exit_slack(a, b, c));
+      geometry.closed_planes.push_back(DepthPlane::of(a, b, c));
     } else {
       emit(geometry.open_vertices, a);
       emit(geometry.open_vertices, b);
       emit(geometry.open_vertices, c);
+      geometry.open_planes.push_back(DepthPlane::of(a, b, c));
       ++geometry.open_count;
     }
   }
@@ -138,6 +171,11 @@ unsigned attach_triangles(RTCDevice device, RTCScene scene, const std::vector<fl
 // Combines one ray's hits into its interval (rules in the header).
 DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t, const DualDepthOptions& options) {
   const float exit_margin = options.exit_margin;
+  // With exit caps, the cap (the shallowest receiver surface inside the texel's square, the exit
+  // triangle included) already bounds what the slack stands for, exactly; the slack is dropped then,
+  // because it belongs to whichever triangle the centre ray hit, and on an edge shared by two
+  // triangles that choice can differ between tilings.
+  const bool use_slack = !options.cap_exits_at_receiver_surfaces || options.open_exit_at_far_plane;
   // Closed hits beyond the nearest open hit were recorded before that hit shortened the ray.
   std::erase_if(closed_hits, [&](const ClosedHit& h) { return h.t > open_t; });
   // Spatial splits may report one triangle twice.
@@ -169,84 +207,16 @@ DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t
     if (hit.heightfield) heightfield_depth += hit.front ? 1 : -1;
     if (depth < 0) return interval;  // inconsistent: stay conservative
     if (depth == 0) {
-      interval.upper = std::max(interval.lower, hit.t - exit_margin - hit.slack);
+      interval.upper = std::max(interval.lower, hit.t - exit_margin - (use_slack ? hit.slack : 0.0f));
       return interval;
     }
   }
   // Still inside: only a heightfield (solid down to the far plane) with no open surface below
-  // gives an exit, the far plane.
+  // gives an exit, the far plane, pulled back by the margin like any exit: receivers beyond the far
+  // plane are answered as on it, and must stay shadowed under terrain.
   if (heightfield_depth > 0 && open_t == std::numeric_limits<float>::infinity())
-    interval.upper = std::max(interval.lower, 1.0f);
+    interval.upper = std::max(interval.lower, 1.0f - exit_margin);
   return interval;
-}
-
-// Receivers lie anywhere in a texel, not only on its centre's ray: near a silhouette or a crease, a
-// shadowed surface other than the centre ray's exit triangle can sit, within the texel, at a depth
-// between the centre ray's entry and exit (the back of a bust just inside its outline, the far slope
-// of a ridge at a grazing sun). Such a receiver must stay shadowed, so each texel's exit is capped by
-// the shallowest depth, within the texel's square, of every surface a shadowed receiver can lie on:
-// closed or heightfield triangles facing away from the light (or edge-on), and open triangles. That
-// depth is exact: the triangle is clipped to the square and depth, linear on it, is smallest at a
-// vertex of the clipped polygon. Computed in the scene's double light-space coordinates (global
-// texels) so the result does not depend on the tiling. Returns the cap per texel of the tile
-// (+inf where nothing limits it).
-struct ClipVertex {
-  double u, v, depth;
-};
-
-// Sutherland-Hodgman against one axis-aligned edge: keeps the side where sign * (coord - bound) >= 0.
-void clip_polygon(std::vector<ClipVertex>& polygon, std::vector<ClipVertex>& scratch, bool along_u, double bound,
-                  double sign) {
-  scratch.clear();
-  const size_t n = polygon.size();
-  for (size_t k = 0; k < n; ++k) {
-    const ClipVertex& p = polygon[k];
-    const ClipVertex& q = polygon[(k + 1) % n];
-    const double dp = sign * ((along_u ? p.u : p.v) - bound), dq = sign * ((along_u ? q.u : q.v) - bound);
-    if (dp >= 0) scratch.push_back(p);
-    if ((dp >= 0) != (dq >= 0)) {
-      const double t = dp / (dp - dq);
-      scratch.push_back({p.u + t * (q.u - p.u), p.v + t * (q.v - p.v), p.depth + t * (q.depth - p.depth)});
-    }
-  }
-  polygon.swap(scratch);
-}
-
-std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord tile) {
-  const uint32_t size = scene.layout().tile_size();
-  const double u0 = double(tile.x) * size, v0 = double(tile.y) * size;
-  std::vector<float> cap(size_t(size) * size, std::numeric_limits<float>::infinity());
-  const Scene& world = scene.scene();
-  std::vector<ClipVertex> polygon, scratch;
-  for (uint32_t t : scene.triangles_of(tile)) {
-    const auto& tri = world.triangles[t];
-    const LightSpacePoint& a = scene.vertex(tri[0]);
-    const LightSpacePoint& b = scene.vertex(tri[1]);
-    const LightSpacePoint& c = scene.vertex(tri[2]);
-    const MeshKind kind = world.meshes[world.triangle_mesh[t]].kind;
-    const double nz = (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
-    if (kind != MeshKind::open && nz < 0) continue;  // faces the light: an entry surface, the lit side
-    const double lo_u = std::min({a.u, b.u, c.u}) - u0, hi_u = std::max({a.u, b.u, c.u}) - u0;
-    const double lo_v = std::min({a.v, b.v, c.v}) - v0, hi_v = std::max({a.v, b.v, c.v}) - v0;
-    if (hi_u < 0 || hi_v < 0 || lo_u >= size || lo_v >= size) continue;
-    const uint32_t i0 = uint32_t(std::max(0.0, std::floor(lo_u))), i1 = uint32_t(std::min(size - 1.0, std::floor(hi_u)));
-    const uint32_t j0 = uint32_t(std::max(0.0, std::floor(lo_v))), j1 = uint32_t(std::min(size - 1.0, std::floor(hi_v)));
-    for (uint32_t j = j0; j <= j1; ++j)
-      for (uint32_t i = i0; i <= i1; ++i) {
-        const double su = u0 + i, sv = v0 + j;  // the texel's square [su, su+1] x [sv, sv+1]
-        polygon = {{a.u, a.v, a.depth}, {b.u, b.v, b.depth}, {c.u, c.v, c.depth}};
-        clip_polygon(polygon, scratch, true, su, 1);
-        if (!polygon.empty()) clip_polygon(polygon, scratch, true, su + 1, -1);
-        if (!polygon.empty()) clip_polygon(polygon, scratch, false, sv, 1);
-        if (!polygon.empty()) clip_polygon(polygon, scratch, false, sv + 1, -1);
-        if (polygon.empty()) continue;
-        double shallowest = polygon.front().depth;
-        for (const ClipVertex& p : polygon) shallowest = std::min(shallowest, p.depth);
-        float& slot = cap[size_t(j) * size + i];
-        slot = std::min(slot, float(shallowest));
-      }
-  }
-  return cap;
 }
 
 }  // namespace
@@ -303,6 +273,7 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
   alignas(64) RTCRayHit16 packet;
   alignas(64) int valid[kPacket];
   const float inf = std::numeric_limits<float>::infinity();
+  const uint64_t tile_u0 = uint64_t(tile.x) * size, tile_v0 = uint64_t(tile.y) * size;
   for (uint32_t v = 0; v < size; ++v) {
     for (uint32_t u_start = 0; u_start < size; u_start += kPacket) {
       for (unsigned lane = 0; lane < kPacket; ++lane) {
@@ -326,8 +297,13 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
       }
       rtcIntersect16(valid, rtc_scene.get(), &context.base, &packet);
       for (unsigned lane = 0; lane < kPacket && u_start + lane < size; ++lane) {
+        // Every hit's depth re-evaluated at the global texel centre (see DepthPlane).
+        const double centre_u = double(tile_u0) + (u_start + lane) + 0.5, centre_v = double(tile_v0) + v + 0.5;
         bool open_hit = packet.hit.geomID[lane] == open_id && open_id != RTC_INVALID_GEOMETRY_ID;
-        float open_t = open_hit ? packet.ray.tfar[lane] : inf;
+        float open_t = open_hit ? geometry.open_planes[packet.hit.primID[lane]].at(centre_u, centre_v,
+                                                                                  packet.ray.tfar[lane])
+                                : inf;
+        for (ClosedHit& hit : lanes[lane]) hit.t = geometry.closed_planes[hit.prim].at(centre_u, centre_v, hit.t);
         DepthInterval interval = resolve_interval(lanes[lane], open_t, options_);
         intervals.at(u_start + lane, v) = interval;
         if (interval.lower < 1.0f) ++local.hits;

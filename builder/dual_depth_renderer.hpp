@@ -6,15 +6,21 @@
 //   pulled back by `exit_margin` plus the exit surface's depth change over half a texel, so receivers
 //   anywhere on the exit surface within the texel (a floor under a box, the shadowed slope of a
 //   hill) stay shadowed for any query bias up to that margin; with cap_exits_at_receiver_surfaces,
-//   also by every shadowed surface inside the texel's square (silhouettes, ridges);
+//   instead of that slope term, by the margin below every shadowed surface inside the texel's
+//   square (silhouettes, ridges; the exit surface's own shallowest point is one of them);
 // - a first hit on an open mesh, a back-facing first hit, or a counter that never returns to 0
 //   before an open surface: upper = lower (conservative, never leaks light);
 // - heightfield meshes bound a solid closed by the far plane: they join the counter walk, so a ray
 //   entering a hill exits where it leaves the hill (receivers in the valley behind stay shadowed),
-//   and a ray that stays inside terrain exits at the far plane (upper = 1);
+//   and a ray that stays inside terrain exits at the far plane less the exit margin (upper =
+//   1 - exit_margin: receivers beyond the far plane are queried as on it);
 // - no hit: [1, +inf), fully lit.
 // The tile's BVH holds only the tile's triangles, in tile-local light space (x, y in texels from the
 // tile corner, z = normalised depth), so float precision is relative to the tile, not the world.
+// Each hit's depth is then re-evaluated in double from the hit triangle's global light-space plane,
+// so stored depths do not depend on the tiling. One residue without exit caps: where the centre ray
+// crosses an edge between two exit triangles, which one Embree reports (and so the slope term) may
+// differ between tilings; lower bounds are unaffected.
 // Thread safety: render() may run concurrently on several threads (each call owns its BVH).
 #pragma once
 

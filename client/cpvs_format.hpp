@@ -78,16 +78,20 @@ inline int64_t depth_step(float threshold, uint32_t depth_steps) {
   return step >= double(depth_steps) ? int64_t(depth_steps) - 1 : int64_t(step);
 }
 
-// Per texel, the steps an interval [lower, upper] pins down: steps z < lit_end lie wholly at or
-// before `lower` and must be lit; steps z >= shadow_begin lie wholly behind `upper` and must be
-// shadowed; steps in between are free (they straddle a bound or lie inside a closed object).
+// Per texel, the steps an interval [lower, upper] pins down: steps z < lit_end, up to and including
+// the step holding `lower`, must be lit; steps z >= shadow_begin lie wholly behind `upper` and must
+// be shadowed; steps in between are free (inside a closed object, or straddling `upper`).
+// The entry's own step is lit, not free: every receiver the lower-bound map (raw) lights, biased
+// depth <= lower, falls in a step <= lower's, so CPVS lights it too, under any tiling (a free step
+// there was resolved per tile, so two tilings answered such receivers differently). The price: a
+// receiver less than one step behind `lower` is lit.
 struct StepBounds {
   uint32_t lit_end = 0;
   uint32_t shadow_begin = 0;
 };
 inline StepBounds step_bounds(float lower, float upper, uint32_t depth_steps) {
   const double n = double(depth_steps);
-  double a = std::floor(double(lower) * n);
+  double a = std::floor(double(lower) * n) + 1.0;
   a = a < 0 ? 0 : (a > n ? n : a);
   double b = std::isinf(upper) ? n : std::floor(double(upper) * n) + 1.0;
   b = b < a ? a : (b > n ? n : b);

@@ -21,6 +21,8 @@ constexpr uint32_t kMaxResolution = 1u << 20;
 // Padding as a fraction of the extent/depth range: keeps geometry off the map border and off the
 // near plane, where rays start.
 constexpr double kPadding = 1e-3;
+// The fewest depth steps a quantising method uses (CPVS: max(map side, 8) steps over [0, 1]).
+constexpr uint32_t kMinQuantisedSteps = 8;
 
 struct Basis {
   Vec3 x, y, z;
@@ -63,9 +65,9 @@ Result<Footprint> project_bounds(const Basis& basis, const WorldBounds& bounds) 
 }
 
 // A degenerate scene (one point, a plane seen edge-on) still needs a positive size.
+double minimum_size(double scale) { return std::max(scale, 1.0) * 1e-6; }
 double padded_size(double size, double scale) {
-  double minimum = std::max(scale, 1.0) * 1e-6;
-  return std::max(size, minimum) * (1.0 + 2.0 * kPadding);
+  return std::max(size, minimum_size(scale)) * (1.0 + 2.0 * kPadding);
 }
 
 }  // namespace
@@ -84,10 +86,13 @@ Result<Vec3> light_direction_from_sun(double azimuth_deg, double elevation_deg, 
   return scaled(to_sun, -1.0);
 }
 
-Result<LightFrame> LightFrame::fit(const Vec3& light_direction, const WorldBounds& bounds, uint32_t resolution) {
+Result<LightFrame> LightFrame::fit(const Vec3& light_direction, const WorldBounds& bounds, uint32_t resolution,
+                                   double far_margin_texels) {
   if (!is_power_of_two(resolution) || resolution > kMaxResolution)
     return make_error(ErrorCode::invalid_input,
                       "resolution must be a power of two in [1, 2^20], got " + std::to_string(resolution));
+  if (!std::isfinite(far_margin_texels) || far_margin_texels < 0)
+    return make_error(ErrorCode::invalid_input, "far margin must be finite and >= 0");
   auto basis = basis_for(light_direction);
   if (!basis) return basis.error();
   auto footprint = project_bounds(*basis, bounds);
@@ -96,9 +101,15 @@ Result<LightFrame> LightFrame::fit(const Vec3& light_direction, const WorldBound
   double scale = std::max({std::fabs(f.min_x), std::fabs(f.max_x), std::fabs(f.min_y), std::fabs(f.max_y),
                            std::fabs(f.min_z), std::fabs(f.max_z)});
   double extent = padded_size(std::max(f.max_x - f.min_x, f.max_y - f.min_y), scale);
-  double depth_range = padded_size(f.max_z - f.min_z, scale);
-  double cx = 0.5 * (f.min_x + f.max_x), cy = 0.5 * (f.min_y + f.max_y), cz = 0.5 * (f.min_z + f.max_z);
-  double x0 = cx - 0.5 * extent, y0 = cy - 0.5 * extent, z0 = cz - 0.5 * depth_range;
+  // Depth: near padding, the bounds, then the far margin. The far part is sized so that, with the
+  // final range, it holds the relative padding, the margin in texels and two quantisation steps.
+  double depth_size = std::max(f.max_z - f.min_z, minimum_size(scale));
+  double near_padding = kPadding * depth_size;
+  double far_margin = kPadding * depth_size + far_margin_texels * extent / resolution;
+  double step_fraction = 2.0 / std::max(resolution, kMinQuantisedSteps);
+  double depth_range = (near_padding + depth_size + far_margin) / (1.0 - step_fraction);
+  double cx = 0.5 * (f.min_x + f.max_x), cy = 0.5 * (f.min_y + f.max_y);
+  double x0 = cx - 0.5 * extent, y0 = cy - 0.5 * extent, z0 = f.min_z - near_padding;
   Vec3 origin{x0 * basis->x[0] + y0 * basis->y[0] + z0 * basis->z[0],
               x0 * basis->x[1] + y0 * basis->y[1] + z0 * basis->z[1],
               x0 * basis->x[2] + y0 * basis->y[2] + z0 * basis->z[2]};

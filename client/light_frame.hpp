@@ -38,11 +38,19 @@ Result<Vec3> light_direction_from_sun(double azimuth_deg, double elevation_deg, 
 
 class LightFrame {
  public:
+  // Default room between the deepest geometry and the far plane, in texel widths: comfortably more
+  // than the default query bias (2) and exit margin (4).
+  static constexpr double kDefaultFarMarginTexels = 16;
+
   // Fits the frame to `bounds`: square extent covering the bounds' projection, depth range covering
-  // the bounds, both padded slightly so geometry never sits exactly on the border.
+  // the bounds, both padded slightly so geometry never sits exactly on the border. Beyond the deepest
+  // geometry the depth range adds `far_margin_texels` texel widths plus two steps of a depth quantised
+  // to max(resolution, 8) steps (CPVS), so no surface reaches depth 1: a receiver beyond the far
+  // plane can then be answered as if on it (nothing shadows it but what shadows the far plane).
   // Errors: zero or non-finite direction, non-finite or inverted bounds, resolution not a power of
-  // two in [1, 2^20].
-  static Result<LightFrame> fit(const Vec3& light_direction, const WorldBounds& bounds, uint32_t resolution);
+  // two in [1, 2^20], a negative or non-finite margin.
+  static Result<LightFrame> fit(const Vec3& light_direction, const WorldBounds& bounds, uint32_t resolution,
+                                double far_margin_texels = kDefaultFarMarginTexels);
   // Rebuilds a frame from stored parameters (see members); validates them like fit().
   static Result<LightFrame> from_parameters(const Vec3& light_direction, const Vec3& origin, double extent,
                                             double depth_range, uint32_t resolution);

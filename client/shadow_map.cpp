@@ -167,7 +167,10 @@ Status check_query(const Vec3& world, double bias_world) {
 }  // namespace
 
 float ShadowMap::biased_depth(double depth, double bias_world) const {
-  return float(depth - frame_.depth_from_world(bias_world));
+  // Beyond the far plane nothing lies (the frame keeps every surface a margin short of depth 1), so
+  // such a receiver is answered as if on the far plane: lit at misses (stored value 1), shadowed
+  // under any surface. Unclamped, its depth would exceed a miss's 1 and read as shadowed.
+  return float(std::min(depth, 1.0) - frame_.depth_from_world(bias_world));
 }
 
 Result<unsigned> ShadowMap::tile_max_level(std::optional<unsigned> level) const {

@@ -1,5 +1,6 @@
 // ShadowMap: answers "is this world point lit?" from a build (DESIGN.md §3): world point ->
-// light space (u, v, depth) -> tile -> decoded value; lit when depth <= value + bias.
+// light space (u, v, depth) -> tile -> decoded value; lit when min(depth, 1) <= value + bias (points
+// beyond the far plane answer as on it: no surface reaches depth 1, see LightFrame::fit).
 // Tiles are read from a TileSource (a local LMDB store, or a server over HTTP), checked (header,
 // checksum, method) and decoded on demand and kept in an LRU cache bounded in bytes. A tile that
 // fails its checks is an error, never an answer.
@@ -110,7 +111,8 @@ class ShadowMap {
   // when it falls off the map. Also returns the max level inside a tile tree for `level`.
   Result<std::pair<ShadowAnswer, unsigned>> locate(const Vec3& world, double bias_world,
                                                    std::optional<unsigned> level) const;
-  // The receiver's depth minus the bias, as compared with stored values.
+  // The receiver's depth, clamped to the far plane (1), minus the bias, as compared with stored
+  // values by every method, point and PCF.
   float biased_depth(double depth, double bias_world) const;
   // Query level -> max level inside a tile tree (255 = finest).
   Result<unsigned> tile_max_level(std::optional<unsigned> level) const;

@@ -156,8 +156,8 @@ TEST(Cpvs, IdenticalSubtreesMerge) {
       tile.at(u, v) = {d, d};
     }
   // Distinct masks the motif allows: slabs, one 8x8 pattern (+ its boundary step); cubes, four 4x4
-  // quadrants, each in the middle of the run and at its first step.
-  for (auto [layout, most_leaves] : {std::pair{LeafLayout::slab8, 4u}, std::pair{LeafLayout::cube4, 8u}}) {
+  // quadrants, each in the middle of the run and at the entry step of each depth (lit: not free).
+  for (auto [layout, most_leaves] : {std::pair{LeafLayout::slab8, 4u}, std::pair{LeafLayout::cube4, 12u}}) {
     CpvsBuildOptions options;
     options.layout = layout;
     auto dag = build_cpvs_dag(tile, 256, options);

@@ -1,6 +1,7 @@
 // Light frame: world <-> light space, basis, fitting, resolution from texel size, tiling.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -79,6 +80,37 @@ TEST(LightFrame, RejectsBadInput) {
   EXPECT_FALSE(LightFrame::fit({0, 0, -1}, bounds, 1u << 21).ok());
   EXPECT_FALSE(LightFrame::fit({0, 0, -1}, WorldBounds{{1, 0, 0}, {0, 1, 1}}, 64).ok());
   EXPECT_TRUE(LightFrame::fit({0, 0, -1}, bounds, 1).ok()) << "a 1x1 map is valid";
+}
+
+// Receivers beyond the far plane are queried as on it (ShadowMap), which is right only when no
+// surface reaches depth 1: the deepest corner stays the far margin (in texels) and two quantisation
+// steps (CPVS: max(resolution, 8) steps) short of it, also for a flat scene and a 1x1 map.
+TEST(LightFrame, DeepestGeometryStaysTheFarMarginShortOfDepthOne) {
+  struct Case {
+    WorldBounds bounds;
+    Vec3 direction;
+    uint32_t resolution;
+    double margin_texels;
+  };
+  for (const Case& c : {Case{{{-10, -20, 0}, {30, 5, 8}}, {1, 1, -2}, 1024, LightFrame::kDefaultFarMarginTexels},
+                        Case{{{0, 0, 0}, {10, 10, 0}}, {0, 0, -1}, 64, LightFrame::kDefaultFarMarginTexels},
+                        Case{{{0, 0, 0}, {1, 1, 100}}, {0, 0, -1}, 4096, 0},  // deep scene: the steps decide
+                        Case{{{0, 0, 0}, {10, 10, 1}}, {0.2, 0.1, -1}, 1, 40}}) {
+    auto frame = LightFrame::fit(c.direction, c.bounds, c.resolution, c.margin_texels);
+    ASSERT_TRUE(frame.ok());
+    double deepest = 0;
+    for (int corner = 0; corner < 8; ++corner) {
+      Vec3 p{(corner & 1) ? c.bounds.max[0] : c.bounds.min[0], (corner & 2) ? c.bounds.max[1] : c.bounds.min[1],
+             (corner & 4) ? c.bounds.max[2] : c.bounds.min[2]};
+      deepest = std::max(deepest, frame->to_light(p).depth);
+    }
+    EXPECT_LE(deepest, 1 - frame->depth_from_world(c.margin_texels * frame->texel_size()) - 2.0 / std::max(c.resolution, 8u));
+    if (c.resolution >= 1024) {
+      EXPECT_GT(deepest, 0.95) << "the margin must not swallow a real scene's depth range";
+    }
+  }
+  EXPECT_FALSE(LightFrame::fit({0, 0, -1}, WorldBounds{{0, 0, 0}, {1, 1, 1}}, 64, -1).ok());
+  EXPECT_FALSE(LightFrame::fit({0, 0, -1}, WorldBounds{{0, 0, 0}, {1, 1, 1}}, 64, NAN).ok());
 }
 
 TEST(LightFrame, DegenerateBoundsStillGiveAPositiveExtent) {

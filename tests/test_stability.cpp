@@ -277,10 +277,9 @@ TEST(StabilityTileSeams, BordersAndFourTileCornersAnswerAsOneTile) {
       if (method == store::Method::raw) {
         EXPECT_EQ(a->lit, b->lit);
         // An absent (empty) tile and a stored miss both answer lit; their values differ (inf vs 1).
-        // Stored depths differ by float rounding only: each tile's BVH holds tile-local coordinates,
-        // so a hit's depth is rounded differently per tiling (a few ulps; STABILITY.md, tile seams).
-        if (!a->empty_tile && !b->empty_tile && a->value != b->value) {
-          EXPECT_NEAR(a->value, b->value, 1e-6);
+        // Otherwise stored depths are bit-identical (hit depths re-evaluated in global doubles).
+        if (!a->empty_tile && !b->empty_tile) {
+          EXPECT_EQ(a->value, b->value);
         }
         for (unsigned kernel : {3u, 5u, 9u}) {
           auto fa = (*one)->query_pcf(p, method, kernel), fb = (*many)->query_pcf(p, method, kernel);
@@ -293,6 +292,64 @@ TEST(StabilityTileSeams, BordersAndFourTileCornersAnswerAsOneTile) {
         EXPECT_FALSE(raw->lit) << store::method_name(method) << ": tilings differ where raw is lit";
       }
     }
+}
+
+// The renderer's output itself, on real scenes: one tile and 128^2 tiles give bit-identical
+// intervals (each tile's BVH holds tile-local floats, so Embree's hit distance is rounded per
+// tiling; every hit's depth is re-evaluated from its triangle's global double plane). Rendered as
+// the build job does (exit margin, exit caps).
+TEST(StabilityTileSeams, RenderedIntervalsAreBitIdenticalUnderAnyTiling) {
+  struct Subject {
+    const char* file;
+    bool heightfield;
+    double elevation;
+  };
+  auto device = EmbreeDevice::create();
+  ASSERT_TRUE(device.ok());
+  const uint32_t resolution = 1024, small = 128;
+  for (const Subject& subject : {Subject{"terragen/RealisticTerrain.ter", true, 30},
+                                 Subject{"nefertiti/nefertiti.obj", false, 45}}) {
+    LoadOptions load;
+    if (subject.heightfield) load.heightfield_meshes = {"*"};
+    auto scene = load_scene(testing::shared_scene(subject.file), load);
+    ASSERT_TRUE(scene.ok());
+    auto frame = LightFrame::fit(*light_direction_from_sun(135, subject.elevation, UpAxis::z), scene->bounds,
+                                 resolution);
+    ASSERT_TRUE(frame.ok());
+    DualDepthOptions options;
+    options.exit_margin = float(frame->depth_from_world(4 * frame->texel_size()));
+    options.cap_exits_at_receiver_surfaces = true;
+    auto whole_layout = TileLayout::make(resolution, resolution), tiled_layout = TileLayout::make(resolution, small);
+    LightSpaceScene whole_scene(*scene, *frame, *whole_layout), tiled_scene(*scene, *frame, *tiled_layout);
+    auto whole = DualDepthRenderer(*device, whole_scene, options).render({0, 0});
+    ASSERT_TRUE(whole.ok());
+    DualDepthRenderer tiled_renderer(*device, tiled_scene, options);
+    uint64_t differing_texels = 0, hits = 0, exits = 0;
+    std::string first_differences;
+    for (uint32_t ty = 0; ty < resolution / small; ++ty)
+      for (uint32_t tx = 0; tx < resolution / small; ++tx) {
+        auto tile = tiled_renderer.render({tx, ty});
+        ASSERT_TRUE(tile.ok());
+        for (uint32_t v = 0; v < small; ++v)
+          for (uint32_t u = 0; u < small; ++u) {
+            const DepthInterval& a = tile->at(u, v);
+            const DepthInterval& b = whole->at(tx * small + u, ty * small + v);
+            if (a.lower != b.lower || a.upper != b.upper) {
+              if (++differing_texels <= 5) {
+                char line[200];
+                std::snprintf(line, sizeof line, "\n  texel (%u, %u): [%.9g, %.9g] tiled, [%.9g, %.9g] whole",
+                              tx * small + u, ty * small + v, a.lower, a.upper, b.lower, b.upper);
+                first_differences += line;
+              }
+            }
+            hits += a.lower < 1;
+            exits += a.upper > a.lower && a.lower < 1;
+          }
+      }
+    EXPECT_EQ(differing_texels, 0u) << subject.file << first_differences;
+    EXPECT_GT(hits, uint64_t(resolution) * resolution / 10) << subject.file << ": the scene covers the map";
+    EXPECT_GT(exits, 1000u) << subject.file << ": exits are compared too";
+  }
 }
 
 // --- 5. Precision ------------------------------------------------------------------------------

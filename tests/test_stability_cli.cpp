@@ -112,8 +112,7 @@ TEST(StabilityCommand, WritesTheReportAndPassesItsChecks) {
                                       "degenerate_input,hash_collisions --out " + report.string() + " --json " +
                                       json.string() + " --scene-root " + testing::shared_scene("").string(),
                                   &output);
-  // 3 = a check failed: allowed only for the known finding skipped below (every other check asserted).
-  EXPECT_TRUE(code == 0 || code == 3) << output;
+  EXPECT_EQ(code, 0) << output;
   std::stringstream md, js;
   md << std::ifstream(report).rdbuf();
   js << std::ifstream(json).rdbuf();
@@ -123,13 +122,7 @@ TEST(StabilityCommand, WritesTheReportAndPassesItsChecks) {
   ASSERT_EQ(doc["scenarios"].size(), 2u);
   for (const auto& scenario : doc["scenarios"]) {
     EXPECT_GT(scenario["checks"].size(), 3u);
-    for (const auto& check : scenario["checks"]) {
-      // Known finding (STABILITY.md): a point beyond the far plane at a miss texel is answered
-      // shadowed; geometry on the far plane stores the same value as a miss, so clamping the depth
-      // would light points under it. The fix belongs in the light frame's depth padding.
-      if (check["name"].get<std::string>().find("beyond the far plane") != std::string::npos) continue;
-      EXPECT_TRUE(check["passed"].get<bool>()) << check.dump();
-    }
+    for (const auto& check : scenario["checks"]) EXPECT_TRUE(check["passed"].get<bool>()) << check.dump();
   }
 }
 

@@ -60,10 +60,11 @@ Result<ScenarioResult> run_degenerate_input(StabilityContext& context) {
       {"zero light direction", triangle, {0, 0, 0}, 64, 64, true, {}},
       {"resolution 1", triangle, {0, 0, -1}, 1, 1, false, {{{2, 2, 1}, true}, {{2, 2, -1}, std::nullopt}}},
       {"tile larger than the map", triangle, {0, 0, -1}, 64, 4096, false, triangle_probes},
-      // A flat scene's depth range is its padding (1e-5 units): (9, 9, -1) lies far beyond the far plane,
-      // at a miss texel whose stored value is 1; the client compares its depth (~1e5) with it.
+      // (9, 9, -1000) lies beyond the far plane at a miss texel (stored value 1): lit, because the
+      // frame keeps a margin behind the deepest surface and queries clamp depths to the far plane;
+      // under the triangle, as deep, shadowed. (9, 9, -1): within the margin.
       {"below a flat scene, outside its footprint (beyond the far plane)", triangle, {0, 0, -1}, 64, 64, false,
-       {{{9, 9, -1}, true}}},
+       {{{9, 9, -1}, true}, {{9, 9, -1000}, true}, {{2, 2, -1000}, false}}},
       {"resolution not a power of two", triangle, {0, 0, -1}, 1000, 1000, true, {}},
       {"resolution 2^21 (over the 2^20 limit)", triangle, {0, 0, -1}, 1u << 21, 1024, true, {}},
   };

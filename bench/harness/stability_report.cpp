@@ -46,9 +46,12 @@ void table(std::string& md, const std::vector<std::string>& header, const std::v
 const char* kFindings = R"(## Findings and fixes
 
 1. **Fixed behind `shadowtiles build --exit-caps`: lossless methods leaked light that raw does not, at
-   silhouettes and ridges** (`builder/dual_depth_renderer.cpp`, `receiver_surface_caps`; this suite builds
-   with it; off by default for now: ×1.6–2.2 bytes and, unoptimised, fzk_haus 8192² builds in 7 min
-   instead of 9.5 s). The dual-depth interval is computed on the
+   silhouettes and ridges** (`builder/receiver_surface_caps.cpp`; this suite builds with it; off by
+   default: ×1.45–2.2 bytes on compressible scenes (nefertiti, terragen 4096²: ×1.51, ×1.45; fzk_haus
+   8192²: ×1.0). The cap pass costs little since builder 0.3.0: rows of the triangle's span, closed form
+   inside it, exact clipping only on edges, bit-identical to per-texel clipping (tests/
+   test_receiver_surface_caps*); fzk_haus 8192² builds in 14–17 s with caps vs 13.5–14.7 s without,
+   was 253 s). The dual-depth interval is computed on the
    texel *centre's* ray, but receivers lie anywhere in the texel. Just inside a silhouette (the back of the
    bust) or behind a ridge at a low sun, a surface facing away from the light sits, within the texel, at a
    depth between the centre ray's entry and exit: it is in shadow, raw (the lower bound) says so, but a value
@@ -62,19 +65,30 @@ const char* kFindings = R"(## Findings and fixes
    nefertiti 2048² (sun 135/45) 52,853 → 84,528 B (×1.6); terragen 1024² (sun 135/30) 46,477 → 102,026 B
    (×2.2). It is conservative where solids intersect (a back face inside another closed mesh also caps).
    Regression tests: `tests/test_stability.cpp` (ClosedBustLeaksNoMoreThanRaw, TerrainLeaksNoMoreThanRawAtLowSun).
-2. **Open: a point beyond the far plane at a miss texel is answered shadowed.** Misses store value 1 (the far plane), and the query compares the point's depth with
-   it, so a point deeper than 1 is shadowed although nothing lies above it. Seen in scenario 7 ("below a
-   flat scene"): a flat scene's depth range is its 1e-5 padding, so a point 1 unit under the plane, beside
-   the triangle, has depth ~1e5. Clamping the query depth to 1 was tried and is wrong: geometry lying on
-   the far plane (the flat scene itself) stores the same value 1 as a miss, so points under it turned lit.
-   The fix is depth padding in the light frame so that no surface sits on the far plane.
-3. **Open, tiling:** stored depths differ by float rounding between tilings (each tile's BVH is in
-   tile-local float coordinates; max 8.6e-7 of the depth range on nefertiti). In the full run this flipped
-   one raw PCF sample (terragen 2048², one tile vs 128² tiles: 1 PCF answer of 3,400 differs). Fix proposed:
-   re-evaluate each hit's depth in double from the hit triangle's global light-space plane. Interval
-   methods may answer points inside an interval differently per tiling, within their contract (scenario 4).
-4. **For the CPVS helper:** CPVS answers differ between tilings where raw is lit (terragen 2048²: 6 points;
-   scenario 4), i.e. its quantisation depends on the tile; it also leaks most at grazing sun (scenario 3).
+2. **Fixed: a point beyond the far plane at a miss texel was answered shadowed** (scenario 7, "below a
+   flat scene"). Misses store value 1 (the far plane) and the query compared the point's depth with it,
+   so a point deeper than 1 was shadowed although nothing lies above it (a flat scene's depth range was
+   its 1e-5 padding, so a point 1 unit under it had depth ~1e5). Clamping the query depth to 1 alone is
+   wrong while geometry can lie on the far plane. Fix (builder 0.3.0): `LightFrame::fit` adds a far
+   margin behind the deepest geometry (16 texels, or 4 exit margins if more, plus two CPVS depth
+   steps), so no surface reaches depth 1; queries clamp the receiver's depth to 1 before the bias
+   (`ShadowMap::biased_depth`, every method, point and PCF); a heightfield's far-plane exit is pulled
+   back by the exit margin like any exit, so receivers beyond the far plane stay shadowed under terrain.
+   Regression tests: `tests/test_far_plane.cpp`.
+3. **Fixed, tiling:** stored depths differed by float rounding between tilings (each tile's BVH is in
+   tile-local float coordinates; max 8.6e-7 of the depth range on nefertiti), which flipped one raw PCF
+   sample (terragen 2048², one tile vs 128² tiles). Fix (builder 0.3.0): each hit's depth is
+   re-evaluated in double from the hit triangle's global light-space plane; with exit caps the exit's
+   slope term (which belongs to whichever of two edge-sharing triangles the ray hit) is left to the cap,
+   which bounds it exactly. Raw's stored values are now bit-identical between tilings (scenario 4), and
+   so are the renderer's intervals (`StabilityTileSeams.RenderedIntervalsAreBitIdenticalUnderAnyTiling`,
+   terragen and nefertiti 1024², one tile vs 128² tiles). Interval methods may still answer points inside
+   an interval differently per tiling, within their contract.
+4. **Fixed: CPVS answers differed between tilings where raw is lit** (terragen 2048²: 6 points). The depth
+   step holding a texel's entry was free and resolved per tile (merging and leaf reuse depend on the
+   tile). Now it must be lit (`cpvs::step_bounds`): every receiver raw lights falls in a step at or before
+   the entry's, so CPVS lights it too, under any tiling; the price is light for receivers less than one
+   step behind the entry. CPVS still leaks most at grazing sun (scenario 3).
 5. **The far-plane exit rule** (MMH authors' code) lights the floor under a one-sided roof: scenario 1
    measures it; our rule (open mesh: exit = entry) keeps every lossless answer equal to raw's there.
 

@@ -1,0 +1,253 @@
+#include "builder/receiver_surface_caps.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace shadowtiles {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Why the fast paths give the clipping's float, bit for bit:
+// - Skipped texels: every vertex the clipping computes lies within a rounding error (~1e-12 texels at
+//   2^16-texel maps) of the triangle and of the half-planes already applied, so a square farther than
+//   kMargin texels from the triangle clips to nothing. Row spans are widened by kMargin accordingly.
+// - Interior texels (square inside the triangle by kMargin): the clipped polygon is the square's four
+//   corners, each computed on the triangle's plane up to a few ulps; its minimum is within eps of the
+//   plane's exact value at the shallowest corner, and so is the closed form. Where x - eps and x + eps
+//   round to the same float, every value between them does (rounding is monotone), the clipping's
+//   included; elsewhere the texel is clipped. eps is ~200x the error analysis' bound (kEpsScale).
+constexpr double kMargin = 1.0 / (1 << 20);      // texels
+constexpr double kEpsScale = 1.0 / (1ull << 40);  // relative to the magnitudes the errors scale with
+
+struct ClipVertex {
+  double u, v, depth;
+};
+
+// A triangle clipped by 4 half-planes has at most 7 vertices in exact arithmetic; rounding can make an
+// intermediate polygon slightly non-convex, and a clip emits at most (kept + sign changes) vertices:
+// 3 -> 4 -> 6 -> 9 -> 13 at worst.
+struct ClipPolygon {
+  std::array<ClipVertex, 13> at;
+  unsigned count = 0;
+};
+
+// Sutherland-Hodgman against one axis-aligned edge: keeps the side where sign * (coord - bound) >= 0.
+// Operation for operation the original per-texel clipping, so its results are reproduced exactly.
+void clip_polygon(const ClipPolygon& in, ClipPolygon& out, bool along_u, double bound, double sign) {
+  out.count = 0;
+  const unsigned n = in.count;
+  for (unsigned k = 0; k < n; ++k) {
+    const ClipVertex& p = in.at[k];
+    const ClipVertex& q = in.at[k + 1 == n ? 0 : k + 1];
+    const double dp = sign * ((along_u ? p.u : p.v) - bound), dq = sign * ((along_u ? q.u : q.v) - bound);
+    if (dp >= 0) out.at[out.count++] = p;
+    if ((dp >= 0) != (dq >= 0)) {
+      const double t = dp / (dp - dq);
+      out.at[out.count++] = {p.u + t * (q.u - p.u), p.v + t * (q.v - p.v), p.depth + t * (q.depth - p.depth)};
+    }
+  }
+}
+
+// The triangle's bounding box (global texels): clips it does not reach by kMargin are skipped.
+struct Box {
+  double lo_u, hi_u, lo_v, hi_v;
+};
+
+// Exact: the shallowest depth of the triangle clipped to [su, su+1] x [sv, sv+1]; +inf if nothing is left.
+// A clip whose line the triangle's box stays kMargin clear of keeps every vertex (all within rounding
+// of the triangle) and adds none, so skipping it leaves the polygon, and the result, unchanged.
+double clipped_shallowest(const LightSpacePoint& a, const LightSpacePoint& b, const LightSpacePoint& c, const Box& box,
+                          double su, double sv) {
+  ClipPolygon first, second;
+  ClipPolygon* polygon = &first;
+  ClipPolygon* scratch = &second;
+  first.at[0] = {a.u, a.v, a.depth};
+  first.at[1] = {b.u, b.v, b.depth};
+  first.at[2] = {c.u, c.v, c.depth};
+  first.count = 3;
+  auto clip = [&](bool along_u, double bound, double sign) {
+    clip_polygon(*polygon, *scratch, along_u, bound, sign);
+    std::swap(polygon, scratch);
+    return polygon->count != 0;
+  };
+  if (box.lo_u < su + kMargin && !clip(true, su, 1)) return kInf;
+  if (box.hi_u > su + 1 - kMargin && !clip(true, su + 1, -1)) return kInf;
+  if (box.lo_v < sv + kMargin && !clip(false, sv, 1)) return kInf;
+  if (box.hi_v > sv + 1 - kMargin && !clip(false, sv + 1, -1)) return kInf;
+  double shallowest = polygon->at[0].depth;
+  for (unsigned k = 0; k < polygon->count; ++k) shallowest = std::min(shallowest, polygon->at[k].depth);
+  return shallowest;
+}
+
+// The triangle's u-extent within the band vlo <= v <= vhi: its vertices in the band and its edges'
+// crossings of the band's borders (lo > hi when it misses the band).
+void u_extent_in_band(const std::array<const LightSpacePoint*, 3>& tri, double vlo, double vhi, double& lo,
+                      double& hi) {
+  lo = kInf;
+  hi = -kInf;
+  for (int k = 0; k < 3; ++k) {
+    const LightSpacePoint& p = *tri[k];
+    const LightSpacePoint& q = *tri[(k + 1) % 3];
+    if (p.v >= vlo && p.v <= vhi) {
+      lo = std::min(lo, p.u);
+      hi = std::max(hi, p.u);
+    }
+    for (double y : {vlo, vhi})
+      if ((p.v < y) != (q.v < y)) {
+        const double u = p.u + (y - p.v) / (q.v - p.v) * (q.u - p.u);
+        lo = std::min(lo, u);
+        hi = std::max(hi, u);
+      }
+  }
+}
+
+// Inside test with margin for one edge: A * (u - pu) + B * (v - pv) >= threshold on the inner side.
+struct EdgeTest {
+  double pu, pv, A, B, threshold;
+};
+
+// What the interior texels need: the edges (oriented inward), the plane's slopes and the error bound.
+struct InteriorPlane {
+  std::array<EdgeTest, 3> edges;
+  double gu = 0, gv = 0;  // depth change per texel along u, v
+  double eps = 0;         // bound on |closed form - clipping| (see the note at the top)
+};
+
+// False when the triangle cannot hold a whole texel square (area < 2 texels², edge-on) or its plane
+// is too ill-conditioned to bound.
+bool make_interior_plane(const LightSpacePoint& a, const LightSpacePoint& b, const LightSpacePoint& c,
+                         InteriorPlane& plane) {
+  const double bu = b.u - a.u, bv = b.v - a.v, bd = b.depth - a.depth;
+  const double cu = c.u - a.u, cv = c.v - a.v, cd = c.depth - a.depth;
+  const double nx = bv * cd - bd * cv, ny = bd * cu - bu * cd, nz = bu * cv - bv * cu;
+  if (!(std::fabs(nz) >= 4.0)) return false;  // |nz| is twice the area; a square needs area >= 2
+  const double s = nz > 0 ? 1.0 : -1.0;
+  const std::array<const LightSpacePoint*, 3> tri{&a, &b, &c};
+  for (int k = 0; k < 3; ++k) {
+    const LightSpacePoint& p = *tri[k];
+    const LightSpacePoint& q = *tri[(k + 1) % 3];
+    EdgeTest& e = plane.edges[k];
+    e = {p.u, p.v, -s * (q.v - p.v), s * (q.u - p.u), 0};
+    e.threshold = kMargin * (std::fabs(e.A) + std::fabs(e.B));
+  }
+  plane.gu = -nx / nz;
+  plane.gv = -ny / nz;
+  // Error terms: the clipping's (rounding of coordinates and depths, scaled by the slopes) and the
+  // closed form's (cancellation in the cross products, amplified by (|p1| + |p2|) / |p1 - p2|).
+  const double depth_scale = std::max({std::fabs(a.depth), std::fabs(b.depth), std::fabs(c.depth)});
+  const double u_scale = std::max({std::fabs(a.u), std::fabs(b.u), std::fabs(c.u)});
+  const double v_scale = std::max({std::fabs(a.v), std::fabs(b.v), std::fabs(c.v)});
+  const double u_extent = std::max(std::fabs(bu), std::fabs(cu)), v_extent = std::max(std::fabs(bv), std::fabs(cv));
+  const double kz = (std::fabs(bu * cv) + std::fabs(bv * cu)) / std::fabs(nz);
+  const double kx = (std::fabs(bv * cd) + std::fabs(bd * cv)) / std::fabs(nz);
+  const double ky = (std::fabs(bd * cu) + std::fabs(bu * cd)) / std::fabs(nz);
+  const double agu = std::fabs(plane.gu), agv = std::fabs(plane.gv);
+  plane.eps = kEpsScale * (depth_scale + agu * u_scale + agv * v_scale + (kx + agu * kz) * u_extent +
+                           (ky + agv * kz) * v_extent);
+  return std::isfinite(plane.eps);
+}
+
+// Texels [first, last] of row sv whose squares lie inside the triangle by kMargin (empty: first > last).
+void interior_span(const InteriorPlane& plane, double sv, double u0, double& first, double& last) {
+  double lo_su = -kInf, hi_su = kInf;  // allowed square origins
+  for (const EdgeTest& e : plane.edges) {
+    // The square's corner with the smallest edge value sets the condition.
+    const double v_corner = e.B >= 0 ? sv : sv + 1;
+    const double rest = e.threshold - e.B * (v_corner - e.pv);
+    if (e.A > 0) lo_su = std::max(lo_su, e.pu + rest / e.A);           // su >= ...
+    else if (e.A < 0) hi_su = std::min(hi_su, e.pu + rest / e.A - 1);  // su + 1 <= ...
+    else if (rest > 0) hi_su = -kInf;
+  }
+  first = std::max(first, std::ceil(lo_su - u0));
+  last = std::min(last, std::floor(hi_su - u0));
+}
+
+}  // namespace
+
+void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, const LightSpacePoint& c,
+                            const TexelWindow& window, std::span<float> cap, ReceiverCapCounts* counts) {
+  const uint32_t size = window.size;
+  const double u0 = window.u0, v0 = window.v0;
+  // The texels the original clipping visited: the bounding box floored to texels, clamped.
+  const double lo_u = std::min({a.u, b.u, c.u}) - u0, hi_u = std::max({a.u, b.u, c.u}) - u0;
+  const double lo_v = std::min({a.v, b.v, c.v}) - v0, hi_v = std::max({a.v, b.v, c.v}) - v0;
+  if (hi_u < 0 || hi_v < 0 || lo_u >= size || lo_v >= size) return;
+  const uint32_t i0 = uint32_t(std::max(0.0, std::floor(lo_u))), i1 = uint32_t(std::min(size - 1.0, std::floor(hi_u)));
+  const uint32_t j0 = uint32_t(std::max(0.0, std::floor(lo_v))), j1 = uint32_t(std::min(size - 1.0, std::floor(hi_v)));
+
+  InteriorPlane plane;
+  const bool has_interior = make_interior_plane(a, b, c, plane);
+  const std::array<const LightSpacePoint*, 3> tri{&a, &b, &c};
+  ReceiverCapCounts local;
+  const Box box{std::min({a.u, b.u, c.u}), std::max({a.u, b.u, c.u}), std::min({a.v, b.v, c.v}),
+                std::max({a.v, b.v, c.v})};
+  auto clip_texel = [&](uint32_t i, uint32_t j, double su, double sv) {
+    float& slot = cap[size_t(j) * size + i];
+    slot = std::min(slot, float(clipped_shallowest(a, b, c, box, su, sv)));
+  };
+  for (uint32_t j = j0; j <= j1; ++j) {
+    const double sv = v0 + j;
+    double lo, hi;
+    u_extent_in_band(tri, sv - kMargin, sv + 1 + kMargin, lo, hi);
+    if (!(lo <= hi)) continue;
+    const double first = std::max(double(i0), std::floor(lo - u0 - kMargin));
+    const double last = std::min(double(i1), std::floor(hi - u0 + kMargin));
+    if (first > last) continue;
+    double inner_first = first, inner_last = first - 1;
+    if (has_interior) {
+      inner_last = last;
+      interior_span(plane, sv, u0, inner_first, inner_last);
+      if (inner_first > inner_last) inner_first = first, inner_last = first - 1;
+    }
+    const uint32_t span_first = uint32_t(first), span_last = uint32_t(last);
+    const uint32_t in_first = uint32_t(inner_first), in_end = uint32_t(inner_last + 1);  // [in_first, in_end)
+    for (uint32_t i = span_first; i < in_first; ++i) clip_texel(i, j, u0 + i, sv);
+    if (in_first < in_end) {
+      // The plane at the square's shallowest corner, rounded to float unless too close to call.
+      const double du = plane.gu > 0 ? 0.0 : 1.0, cv = sv + (plane.gv > 0 ? 0.0 : 1.0);
+      const double row_depth = a.depth + plane.gv * (cv - a.v);
+      float* row = &cap[size_t(j) * size];
+      for (uint32_t i = in_first; i < in_end; ++i) {
+        const double x = row_depth + plane.gu * ((u0 + i) + du - a.u);
+        const float below = float(x - plane.eps), above = float(x + plane.eps);
+        if (below == above) {
+          row[i] = std::min(row[i], below);
+        } else {
+          clip_texel(i, j, u0 + i, sv);
+          ++local.fallback;
+        }
+      }
+      local.interior += in_end - in_first;
+    }
+    for (uint32_t i = std::max(in_end, span_first); i <= span_last; ++i) clip_texel(i, j, u0 + i, sv);
+    local.clipped += (span_last - span_first + 1) - (in_end - in_first);
+  }
+  if (counts) {
+    counts->clipped += local.clipped;
+    counts->interior += local.interior;
+    counts->fallback += local.fallback;
+  }
+}
+
+std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord tile, ReceiverCapCounts* counts) {
+  const uint32_t size = scene.layout().tile_size();
+  const TexelWindow window{double(tile.x) * size, double(tile.y) * size, size};
+  std::vector<float> cap(size_t(size) * size, std::numeric_limits<float>::infinity());
+  const Scene& world = scene.scene();
+  for (uint32_t t : scene.triangles_of(tile)) {
+    const auto& tri = world.triangles[t];
+    const LightSpacePoint& a = scene.vertex(tri[0]);
+    const LightSpacePoint& b = scene.vertex(tri[1]);
+    const LightSpacePoint& c = scene.vertex(tri[2]);
+    const MeshKind kind = world.meshes[world.triangle_mesh[t]].kind;
+    const double nz = (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
+    if (kind != MeshKind::open && nz < 0) continue;  // faces the light: an entry surface, the lit side
+    lower_caps_by_triangle(a, b, c, window, cap, counts);
+  }
+  return cap;
+}
+
+}  // namespace shadowtiles
