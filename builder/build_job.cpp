@@ -16,6 +16,7 @@
 #include <spdlog/spdlog.h>
 
 #include "builder/builder_version.hpp"
+#include "builder/dagmh_encoder.hpp"
 #include "builder/dual_depth_renderer.hpp"
 #include "builder/file_hash.hpp"
 #include "builder/light_space_scene.hpp"
@@ -137,7 +138,7 @@ DepthInterval progress_root(std::span<const uint8_t> value) {
 }
 
 bool is_hierarchical(store::Method method) {
-  return method == store::Method::mh || method == store::Method::mmh;
+  return method == store::Method::mh || method == store::Method::mmh || method == store::Method::dagmh;
 }
 
 }  // namespace
@@ -378,10 +379,15 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
         if (!merged) return merged.error();
         top = std::move(merged);
       }
-      MhEncodeOptions top_options;
-      top_options.embed_skip_list = true;
-      top_options.skip_level = std::min<unsigned>(6, layout->tile_level());
-      auto payload = encode_mh(*top, top_options);
+      Result<std::vector<uint8_t>> payload = std::vector<uint8_t>{};
+      if (method == store::Method::dagmh) {
+        payload = encode_dagmh(*top);  // its own skip list (DagMhOptions defaults, as the tiles)
+      } else {
+        MhEncodeOptions top_options;
+        top_options.embed_skip_list = true;
+        top_options.skip_level = std::min<unsigned>(6, layout->tile_level());
+        payload = encode_mh(*top, top_options);
+      }
       if (!payload) return payload.error();
       auto blob = store::encode_blob(method, *payload, 0, config.zstd_level);
       top_bytes[store::method_name(method)] = blob.size();
