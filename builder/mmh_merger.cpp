@@ -153,49 +153,70 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
   std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return m.height[a] > m.height[b]; });
 
   const uint64_t hash_mask = options.hash_bits == 64 ? ~uint64_t(0) : (uint64_t(1) << options.hash_bits) - 1;
-  // Bucket entries carry the representative's hull and first interval inline, so the scan over up
-  // to max_tests_per_block candidates is sequential; only candidates passing both filters pay for
-  // the full comparison (which misses the cache).
-  struct Rep {
-    uint32_t block;
-    uint8_t height;
-    DepthInterval hull, first;
-  };
-  auto intersects = [](const DepthInterval& x, const DepthInterval& y) {
-    return x.lower <= y.upper && y.lower <= x.upper;
+  // Representatives per bucket as parallel arrays (hull and first interval inline), so the scan of up
+  // to max_tests_per_block candidates is a branch-free pass over 64 at a time that the compiler
+  // vectorises; only candidates passing both filters pay for the full comparison (which misses the
+  // cache). Same candidates, same order (most recent first), same first fit as a one-by-one scan.
+  struct Reps {
+    std::vector<uint32_t> block;
+    std::vector<float> height;  // as float, so the filter loop compares one type
+    std::vector<float> hull_lower, hull_upper, first_lower, first_upper;
+    size_t size() const { return block.size(); }
+    void push(uint32_t b, float ht, const DepthInterval& hull, const DepthInterval& first) {
+      block.push_back(b), height.push_back(ht);
+      hull_lower.push_back(hull.lower), hull_upper.push_back(hull.upper);
+      first_lower.push_back(first.lower), first_upper.push_back(first.upper);
+    }
   };
   auto first_interval = [&](uint32_t b) {  // interval of the first valued node in b's subtree
     while (F::valued_children(h.block_mask[b]) == 0) b = m.child(b, 0);
     return m.interval(b, 0);
   };
-  std::unordered_map<uint64_t, std::vector<Rep>> buckets;
+  std::unordered_map<uint64_t, Reps> buckets;
+  uint64_t scanned = 0;
   for (const uint32_t b : order) {
     if (m.dead[b] || b == h.root_block) continue;
-    auto& reps = buckets[mix(m.height[b], m.hash[b] & hash_mask)];
-    const DepthInterval first = first_interval(b);
+    Reps& reps = buckets[mix(m.height[b], m.hash[b] & hash_mask)];
+    const DepthInterval first = first_interval(b), hull = m.hull[b];
+    const float height = m.height[b];
+    const size_t stop = reps.size() > options.max_tests_per_block ? reps.size() - options.max_tests_per_block : 0;
     bool merged = false;
-    unsigned tests = 0;
-    for (size_t k = reps.size(); k-- > 0 && tests < options.max_tests_per_block; ++tests) {
-      Rep& rep = reps[k];
-      if (rep.height != m.height[b]) continue;  // a bucket-key collision across heights
-      if (!intersects(rep.hull, m.hull[b]) || !intersects(rep.first, first)) {
-        ++st.hull_rejections;
-        continue;
+    for (size_t end = reps.size(); end > stop && !merged;) {
+      const size_t begin = std::max(stop, end >= 64 ? end - 64 : size_t(0));
+      // pass[i]: candidate begin + i passes the filters (intersecting hulls and first intervals; same
+      // height: bucket keys may collide across heights).
+      const size_t count = end - begin;
+      const float* hl = reps.hull_lower.data() + begin;
+      const float* hu = reps.hull_upper.data() + begin;
+      const float* fl = reps.first_lower.data() + begin;
+      const float* fu = reps.first_upper.data() + begin;
+      const float* ht = reps.height.data() + begin;
+      alignas(64) int32_t pass[64];
+      for (size_t k = 0; k < count; ++k)  // float compares only, no branches: this loop vectorises
+        pass[k] = (hl[k] <= hull.upper) & (hull.lower <= hu[k]) & (fl[k] <= first.upper) &
+                  (first.lower <= fu[k]) & (ht[k] == height);
+      scanned += count;
+      for (size_t i = count; i-- > 0;) {  // most recent first
+        if (!pass[i]) continue;
+        const size_t k = begin + i;
+        ++st.full_tests;
+        const Match match = m.compare(b, reps.block[k]);
+        if (match == Match::topology) ++st.topology_mismatches;
+        if (match != Match::ok) continue;
+        m.narrow(reps.block[k], b);
+        const DepthInterval narrowed = first_interval(reps.block[k]);
+        reps.first_lower[k] = narrowed.lower, reps.first_upper[k] = narrowed.upper;
+        h.child_block[parent_entry[b]] = reps.block[k];
+        m.kill(b);
+        ++st.merges;
+        merged = true;
+        break;
       }
-      ++st.full_tests;
-      const Match match = m.compare(b, rep.block);
-      if (match == Match::topology) ++st.topology_mismatches;
-      if (match != Match::ok) continue;
-      m.narrow(rep.block, b);
-      rep.first = first_interval(rep.block);
-      h.child_block[parent_entry[b]] = rep.block;
-      m.kill(b);
-      ++st.merges;
-      merged = true;
-      break;
+      end = begin;
     }
-    if (!merged) reps.push_back(Rep{b, m.height[b], m.hull[b], first});
+    if (!merged) reps.push(b, height, hull, first);
   }
+  st.hull_rejections = scanned - st.full_tests;  // includes the rare bucket-key collisions across heights
   MhHierarchy out = compact(h);
   st.blocks_after = out.block_count();
   return out;
