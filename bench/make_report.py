@@ -1,7 +1,11 @@
 #!/usr/bin/env python3
-"""Turn a `shadowtiles bench` results.json into BENCHMARKS.md and charts (SVG + PNG).
+"""Turn `shadowtiles bench` results.json files into BENCHMARKS.md and charts (SVG + PNG).
 
-    python3 bench/make_report.py OUT/results.json [--md BENCHMARKS.md] [--charts docs/bench]
+    python3 bench/make_report.py OUT/results.json [MORE/results.json ...] [--md BENCHMARKS.md] [--charts docs/bench]
+
+Several results files (e.g. the standard run and a separate 64K run) are reported as one: their rows
+are concatenated (a later file's row replaces an earlier one for the same scene, resolution and method)
+and every run's machine, date and commit is listed.
 
 Charts use matplotlib (Debian python3-matplotlib): one library for both SVG and PNG, and the script
 already needs Python for the JSON and the tables. If the `python3` on PATH lacks matplotlib (e.g. a
@@ -172,6 +176,20 @@ def make_charts(rows, builds, charts_dir):
                                                "Bytes at rest vs resolution (dashed: uncompressed float32 map)",
                                                bytes_vs_res),
     }
+    def encode_vs_res(ax, scene):
+        for m in methods:
+            s = [r for r in series(rows, scene, m) if r.get("build_method_encode_s")]
+            if s:
+                ax.plot([r["resolution"] for r in s], [r["build_method_encode_s"] for r in s],
+                        marker=MARKERS.get(m, "x"), label=m)
+        ax.set_xscale("log", base=2)
+        ax.set_yscale("log")
+        ax.set_xlabel("map side (texels)", fontsize=8)
+        ax.set_ylabel("encode seconds (thread sum)", fontsize=8)
+
+    charts["encode_seconds"] = per_scene_chart(
+        rows, charts_dir, "encode_seconds",
+        "Encode seconds per method vs resolution (MH construction counted under mh; rays shared by all)", encode_vs_res)
     fig, ax = plt.subplots(figsize=(5.5, 3.6))
     for scene in scenes_of(rows):
         b = sorted((x for x in builds if x["scene"] == scene), key=lambda x: x["resolution"])
@@ -194,7 +212,7 @@ def table(header, lines):
     return "\n".join(out)
 
 
-def anchors(rows):
+def anchors(rows, sizes=()):
     parts = ["Printed beside ours for scale only: **these are the papers' figures on the papers' scenes** "
              "(Closed City, Villa, Citadel, Hairball), which are not ours. Compare ratios, not bytes."]
     lines = []
@@ -221,6 +239,11 @@ def anchors(rows):
         for r in sorted(dag):
             lines.append([f"ours: {scene}", res_label(r), "-", f"{mb(mmh[r]):.2f}" if r in mmh else "-",
                           f"{mb(dag[r]):.2f}", f"{dag[r] / mmh[r]:.2f}" if r in mmh else "-"])
+    for e in sizes:
+        b = e["stats"].get("bytes_by_method", {})
+        if "dagmh" in b and "mmh" in b:
+            lines.append([f"ours (sizes run): {e['scene']}", res_label(e["resolution"]), "-", f"{mb(b['mmh']):.2f}",
+                          f"{mb(b['dagmh']):.2f}", f"{b['dagmh'] / b['mmh']:.2f}"])
     if not any(r["method"] == "dagmh" for r in rows):
         lines.append(["ours", "-", "-", "-", "not built yet", "-"])
     parts.append("**DAG-MH vs MMH** (MB; DESIGN.md §7)\n\n" +
@@ -228,19 +251,44 @@ def anchors(rows):
     return "\n\n".join(parts)
 
 
-def report(doc, charts, md_path):
-    rows, builds, machine = doc["rows"], doc["builds"], doc["machine"]
-    cfg = doc.get("config", {})
+def sizes_section(sizes):
+    """Builds without ground truth or lookups (bench/build_sizes.py): bytes and encode time per method."""
+    methods = [m for m in METHOD_ORDER if any(m in e["stats"].get("bytes_by_method", {}) for e in sizes)]
+    out = ["## Sizes-only runs", "",
+           "Built by `bench/build_sizes.py` (same scenes, sun and tiles as the bench; no ground truth or lookups: at "
+           "64K² the bench's raw reference would need 34 GB decoded). Bytes at rest (tiles + top levels), encode "
+           "seconds as thread sums (MH construction counted under mh).", ""]
+    lines = []
+    for e in sorted(sizes, key=lambda e: (e["resolution"], e["scene"])):
+        st = e["stats"]
+        b, t = st.get("bytes_by_method", {}), st.get("encode_seconds_by_method", {})
+        top = st.get("top_bytes_by_method", {})
+        lines.append([e["scene"], res_label(e["resolution"])] +
+                     [fmt_bytes(b[m] + top.get(m, 0)) if m in b else "-" for m in methods] +
+                     [f"{b['dagmh'] / b['mmh']:.3f}" if "dagmh" in b and "mmh" in b else "-"] +
+                     [f"{t[m]:.0f}" if m in t else "-" for m in methods] +
+                     [f"{st.get('seconds', {}).get('rays_thread_sum', 0):.0f}", f"{e.get('wall_s', 0):.0f}",
+                      f"{st.get('peak_memory_mib', 0):.0f}"])
+    out.append(table(["scene", "res"] + [f"{m} bytes" for m in methods] + ["DAG-MH/MMH"] +
+                     [f"{m} encode s" for m in methods] + ["rays Σ s", "wall s", "peak MiB"], lines))
+    return out + [""]
+
+
+def report(doc, charts, md_path, sizes=()):
+    rows, builds = doc["rows"], doc["builds"]
     rel = lambda p: os.path.relpath(p, os.path.dirname(os.path.abspath(md_path)))
     out = ["# Benchmarks", "",
            "Generated by `bench/make_report.py` from `shadowtiles bench` results; do not edit by hand. Regenerate:", "",
            "```sh",
-           "./build/cli/shadowtiles bench --config config/bench-full.json --out out/bench-full   # quick: config/bench-quick.json",
-           "python3 bench/make_report.py out/bench-full/results.json --md BENCHMARKS.md --charts docs/bench",
+           "bash bench/run_full.sh   # bench 4K+16K (config/bench-standard.json), sizes-only 64K, then this report",
+           "# quick: shadowtiles bench --config config/bench-quick.json --out out/bench-quick; make_report.py out/bench-quick/results.json",
            "```", "",
-           f"Machine: {machine.get('cpu_model')} ({machine.get('nproc')} threads), {machine.get('memory_gib', 0):.0f} GiB; "
-           f"date {machine.get('date')}; commit `{machine.get('git_commit')}`{' (dirty tree)' if machine.get('git_dirty') else ''}. "
-           f"Config: {cfg.get('description', '')}", ""]
+           ]
+    for run in doc["runs"]:
+        machine, cfg = run["machine"], run.get("config", {})
+        out += [f"Run `{run['file']}`: {machine.get('cpu_model')} ({machine.get('nproc')} threads), "
+                f"{machine.get('memory_gib', 0):.0f} GiB; date {machine.get('date')}; commit `{machine.get('git_commit')}`"
+                f"{' (dirty tree)' if machine.get('git_dirty') else ''}. Config: {cfg.get('description', '')}", ""]
     for note in doc.get("notes", []):
         out.append(f"- Note: {note}")
     out += ["", "## How to read", "",
@@ -262,7 +310,8 @@ def report(doc, charts, md_path):
             "order, rand = shuffled; ×2 = two threads.", ""]
     out += ["## Charts", ""]
     for name, title in [("error_vs_bytes", "Error vs bytes"), ("error_vs_speed", "Error vs lookups/s"),
-                        ("bytes_vs_resolution", "Bytes vs resolution"), ("build_seconds", "Build seconds vs resolution")]:
+                        ("bytes_vs_resolution", "Bytes vs resolution"), ("build_seconds", "Build seconds vs resolution"),
+                        ("encode_seconds", "Encode seconds per method vs resolution")]:
         svg = [p for p in charts[name] if p.endswith(".svg")][0]
         png = [p for p in charts[name] if p.endswith(".png")][0]
         out += [f"**{title}** ([SVG]({rel(svg)}))", "", f"![{title}]({rel(png)})", ""]
@@ -271,12 +320,13 @@ def report(doc, charts, md_path):
                        key=lambda r: (r["resolution"], METHOD_ORDER.index(r["method"]) if r["method"] in METHOD_ORDER else 99))
         out += [f"## {scene}", ""]
         out.append(table(["res", "method", "bytes", "payload", "B/texel", "ratio", "err %", "f-lit", "f-shad", "cam err %",
-                          "≠raw", "pcf3 MAE", "pcf5 MAE"],
+                          "≠raw", "pcf3 MAE", "pcf5 MAE", "encode s"],
                          [[res_label(r["resolution"]), r["method"], fmt_bytes(r["blob_bytes"]), fmt_bytes(r["payload_bytes"]),
                            f"{r['bytes_per_nonempty_texel']:.3f}", f"{r['compression_ratio']:.1f}",
                            f"{100 * r['error_rate']:.3f}", r["false_lit"], r["false_shadowed"],
                            f"{100 * r['camera_error_rate']:.3f}", r["differs_from_raw"],
-                           f"{r.get('pcf3_mae', 0):.4f}", f"{r.get('pcf5_mae', 0):.4f}"] for r in srows]))
+                           f"{r.get('pcf3_mae', 0):.4f}", f"{r.get('pcf5_mae', 0):.4f}",
+                           f"{r['build_method_encode_s']:.1f}" if "build_method_encode_s" in r else "-"] for r in srows]))
         out += ["", "Lookups/s (millions):", ""]
         out.append(table(["res", "method", "point rows", "point cam", "point rand", "point rows ×2", "point rand ×2",
                           "pcf3 rows", "pcf3 rand", "pcf5 rows", "pcf5 rand", "pcf5 rand ×2"],
@@ -293,7 +343,9 @@ def report(doc, charts, md_path):
                           ("load", "index", "bvh_thread_sum", "rays_thread_sum", "encode_thread_sum", "store_thread_sum", "total")]
                           + [x["stats"].get("rays", 0), f"{x.get('peak_rss_mib', 0):.0f}"] for x in b]))
         out.append("")
-    out += ["## Paper anchors", "", anchors(rows), ""]
+    if sizes:
+        out += sizes_section(sizes)
+    out += ["## Paper anchors", "", anchors(rows, sizes), ""]
     out += ["## Summary: bytes, error and lookups/s per method", ""]
     lines = []
     for r in sorted(rows, key=lambda r: (r["resolution"], r["scene"], r["method"])):
@@ -305,18 +357,38 @@ def report(doc, charts, md_path):
         f.write("\n".join(out))
 
 
+def merge_runs(paths):
+    """One document from several runs: rows and builds keyed by (scene, resolution[, method]), later wins."""
+    rows, builds, runs, notes = {}, {}, [], []
+    for path in paths:
+        with open(path) as f:
+            doc = json.load(f)
+        if not doc.get("rows"):
+            sys.exit("no rows in " + path)
+        runs.append({"file": path, "machine": doc.get("machine", {}), "config": doc.get("config", {})})
+        notes += doc.get("notes", [])
+        for r in doc["rows"]:
+            rows[(r["scene"], r["resolution"], r["method"])] = r
+        for b in doc.get("builds", []):
+            builds[(b["scene"], b["resolution"])] = b
+    return {"rows": list(rows.values()), "builds": list(builds.values()), "runs": runs,
+            "notes": sorted(set(notes), key=notes.index)}
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("results", help="results.json written by `shadowtiles bench`")
+    ap.add_argument("results", nargs="+", help="results.json files written by `shadowtiles bench`")
+    ap.add_argument("--sizes", nargs="*", default=[], help="sizes-only runs written by bench/build_sizes.py")
     ap.add_argument("--md", default="BENCHMARKS.md", help="Markdown report to write")
     ap.add_argument("--charts", default="docs/bench", help="folder for the SVG and PNG charts")
     args = ap.parse_args()
-    with open(args.results) as f:
-        doc = json.load(f)
-    if not doc.get("rows"):
-        sys.exit("no rows in " + args.results)
+    doc = merge_runs(args.results)
+    sizes = []
+    for path in args.sizes:
+        with open(path) as f:
+            sizes += json.load(f)["scenes"]
     charts = make_charts(doc["rows"], doc.get("builds", []), args.charts)
-    report(doc, charts, args.md)
+    report(doc, charts, args.md, sizes)
     print(f"wrote {args.md} and {len(charts)} charts (SVG + PNG) in {args.charts}")
 
 

@@ -60,7 +60,7 @@ int run(const BenchFlags& flags) {
 void add_bench_command(CLI::App& app, int& exit_code) {
   auto flags = std::make_shared<BenchFlags>();
   CLI::App* cmd = app.add_subcommand("bench", "Speed vs accuracy: build, size, ground-truth error, lookups/s per method");
-  cmd->add_option("--config,-c", flags->config, "Bench config JSON (config/bench-quick.json, config/bench-full.json)")
+  cmd->add_option("--config,-c", flags->config, "Bench config JSON (config/bench-quick.json, config/bench-standard.json)")
       ->required();
   cmd->add_option("--out,-o", flags->out, "Output folder (results.json, results.csv, stores/)")->required();
   cmd->add_option("--scenes", flags->scenes, "Only these scenes of the config, comma-separated");

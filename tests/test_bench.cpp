@@ -41,6 +41,7 @@ std::string read_file(const std::filesystem::path& path) {
 struct BenchOutput {
   nlohmann::json doc;
   std::string csv;
+  std::filesystem::path results;  // results.json
 };
 
 BenchOutput run_tiny_bench(const TempDir& dir) {
@@ -65,6 +66,7 @@ BenchOutput run_tiny_bench(const TempDir& dir) {
   BenchOutput result;
   result.doc = nlohmann::json::parse(read_file(out / "results.json"), nullptr, false);
   result.csv = read_file(out / "results.csv");
+  result.results = out / "results.json";
   // The per-scene table went to stdout.
   EXPECT_NE(output.find("scene bunny"), std::string::npos) << output;
   return result;
@@ -108,6 +110,7 @@ TEST(Bench, TinyRunWritesSaneFigures) {
     EXPECT_LT(row["error_rate"].get<double>(), 0.2) << what;  // raw at 512^2 agrees on the vast majority
     EXPECT_GE(row["pcf3_mae"].get<double>(), 0) << what;
     EXPECT_LT(row["pcf3_mae"].get<double>(), 0.2) << what;
+    EXPECT_GT(row["build_method_encode_s"].get<double>(), 0) << what;  // each method's own encode time
     const std::string method = row["method"];
     if (std::find(std::begin(kLossless), std::end(kLossless), method) == std::end(kLossless)) continue;
     const auto& ref = raw[row["scene"]];
@@ -126,6 +129,36 @@ TEST(Bench, TinyRunWritesSaneFigures) {
       EXPECT_LE(row["worse_than_raw"].get<int>(), 20) << what;
     }
   }
+}
+
+// The report generator (bench/make_report.py, python3-matplotlib from scripts/install-deps.sh) turns
+// two runs' results into one BENCHMARKS.md with every scene, the paper anchors and all charts.
+TEST(Bench, ReportMergesRunsIntoMarkdownAndCharts) {
+  if (!std::filesystem::exists(st::testing::shared_scene("bunny/stanford-bunny.obj")))
+    GTEST_SKIP() << "needs ../shared/scenes";
+  TempDir dir;
+  BenchOutput out = run_tiny_bench(dir);
+  ASSERT_FALSE(out.doc.is_discarded());
+  // A second "run": the same rows at another resolution, as a separate 64K run would add.
+  nlohmann::json second = out.doc;
+  for (auto& row : second["rows"]) row["resolution"] = 1024;
+  for (auto& build : second["builds"]) build["resolution"] = 1024;
+  std::ofstream(dir.path() / "second.json") << second.dump();
+  const auto md = dir.path() / "BENCH.md", charts = dir.path() / "charts";
+  std::string output;
+  const std::string script = (std::filesystem::path(SHADOWTILES_SOURCE_DIR) / "bench" / "make_report.py").string();
+  int code = st::testing::run_command("python3 " + script + " " + out.results.string() + " " +
+                                          (dir.path() / "second.json").string() + " --md " + md.string() +
+                                          " --charts " + charts.string(),
+                                      &output);
+  ASSERT_EQ(code, 0) << output;
+  const std::string text = read_file(md);
+  for (const char* part : {"## bunny", "## nefertiti", "## Paper anchors", "DAG-MH/MMH", "| 1K | dagmh |",
+                           "| 512 | dagmh |", "second.json"})
+    EXPECT_NE(text.find(part), std::string::npos) << part << " missing from the report";
+  for (const char* chart : {"error_vs_bytes", "error_vs_speed", "bytes_vs_resolution", "build_seconds", "encode_seconds"})
+    for (const char* ext : {".svg", ".png"})
+      EXPECT_GT(std::filesystem::file_size(charts / (std::string(chart) + ext)), 1000u) << chart << ext;
 }
 
 TEST(Bench, RejectsUnknownConfigKeys) {

@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""Sizes-only runs: build every scene of a bench config at one resolution and record what each
+method stores, without the bench's ground truth and lookup loops (which need the raw reference
+decoded in memory: 34 GB at 64K^2, more than the machine has).
+
+    python3 bench/build_sizes.py --config config/bench-standard.json --resolution 65536 \
+        --methods mh,mmh,dagmh --out out/sizes-64k.json [--scenes a,b] [--cli build/cli/shadowtiles]
+
+One `shadowtiles build --json` per scene (same sun, up axis and heightfield flags as the bench),
+the store deleted afterwards. The output is rewritten after every scene and scenes already in it
+are skipped, so an interrupted run resumes. bench/make_report.py --sizes reads it.
+"""
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--config", required=True, help="bench config (scenes, sun, tile size, threads)")
+    ap.add_argument("--resolution", type=int, required=True, help="map side in texels (power of two)")
+    ap.add_argument("--methods", default="mh,mmh,dagmh", help="methods to build, comma-separated")
+    ap.add_argument("--out", required=True, help="JSON file to write (and resume from)")
+    ap.add_argument("--scenes", default="", help="only these scenes (comma-separated names)")
+    ap.add_argument("--cli", default="build/cli/shadowtiles", help="the shadowtiles executable")
+    ap.add_argument("--work", default="out/build-sizes-store", help="scratch store directory")
+    args = ap.parse_args()
+
+    with open(args.config) as f:
+        config = json.load(f)
+    root = os.path.join(os.path.dirname(os.path.abspath(args.config)), config["scene_root"])
+    wanted = [s for s in args.scenes.split(",") if s]
+    doc = {"resolution": args.resolution, "methods": args.methods.split(","), "config": args.config, "scenes": []}
+    if os.path.exists(args.out):
+        with open(args.out) as f:
+            doc = json.load(f)
+    done = {(s["scene"], s["resolution"]) for s in doc["scenes"]}
+
+    for scene in config["scenes"]:
+        name = scene["name"]
+        if (wanted and name not in wanted) or (name, args.resolution) in done:
+            continue
+        cmd = [args.cli, "-q", "build", os.path.join(root, scene["file"]), "-o", args.work, "--overwrite", "--json",
+               "-r", str(args.resolution), "--tile", str(min(config.get("tile_size", 4096), args.resolution)),
+               "-j", str(config.get("build_threads", 2)), "-m", args.methods, "--up", scene.get("up", "z"),
+               "--sun", ",".join(str(x) for x in scene.get("sun", [135, 45]))]
+        for mesh in scene.get("heightfield", []):
+            cmd += ["--heightfield", mesh]
+        print(f"{name} {args.resolution}^2: {' '.join(cmd)}", flush=True)
+        start = time.time()
+        result = subprocess.run(cmd, capture_output=True, text=True)
+        shutil.rmtree(args.work, ignore_errors=True)
+        if result.returncode != 0:
+            sys.exit(f"build of {name} failed ({result.returncode}):\n{result.stderr}")
+        stats = json.loads(result.stdout)
+        stats = stats.get("stats", stats)
+        entry = {"scene": name, "resolution": args.resolution, "wall_s": time.time() - start, "stats": stats}
+        doc["scenes"].append(entry)
+        with open(args.out + ".tmp", "w") as f:
+            json.dump(doc, f, indent=1)
+        os.replace(args.out + ".tmp", args.out)
+        bytes_by = stats.get("bytes_by_method", {})
+        print("  " + ", ".join(f"{m} {b:,} B" for m, b in sorted(bytes_by.items())) + f"; {entry['wall_s']:.0f} s",
+              flush=True)
+
+
+if __name__ == "__main__":
+    main()
