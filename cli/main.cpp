@@ -1,10 +1,18 @@
 // shadowtiles: one CLI for the whole product (build, query, inspect, ...). Exit codes: cli/exit_codes.hpp.
+#include <memory>
+
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include "cli/commands.hpp"
 #include "cli/exit_codes.hpp"
 
 int main(int argc, char** argv) {
+  // Logs go to stderr: stdout carries results (--json documents, query answers, tables) for pipes.
+  // (Single-threaded here, before any logging, so swapping the default logger's sink is safe.)
+  auto& sinks = spdlog::default_logger()->sinks();
+  sinks.clear();
+  sinks.push_back(std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
   CLI::App app{"shadowtiles: lossless compressed shadow maps of huge static worlds"};
   app.require_subcommand(1);
   app.fallthrough();  // -v/-q work after the command name too
