@@ -34,7 +34,12 @@ def main():
         config = json.load(f)
     root = os.path.join(os.path.dirname(os.path.abspath(args.config)), config["scene_root"])
     wanted = [s for s in args.scenes.split(",") if s]
-    doc = {"resolution": args.resolution, "methods": args.methods.split(","), "config": args.config, "scenes": []}
+    commit = subprocess.run(["git", "rev-parse", "--short=12", "HEAD"], capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True,
+                           text=True).stdout.strip() != ""
+    doc = {"resolution": args.resolution, "methods": args.methods.split(","), "config": args.config,
+           "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "git_commit": commit, "git_dirty": dirty,
+           "scenes": []}
     if os.path.exists(args.out):
         with open(args.out) as f:
             doc = json.load(f)

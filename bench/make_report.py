@@ -262,14 +262,15 @@ def sizes_section(sizes):
     for e in sorted(sizes, key=lambda e: (e["resolution"], e["scene"])):
         st = e["stats"]
         b, t = st.get("bytes_by_method", {}), st.get("encode_seconds_by_method", {})
-        top = st.get("top_bytes_by_method", {})
+        top, p = st.get("top_bytes_by_method", {}), st.get("payload_bytes_by_method", {})
         lines.append([e["scene"], res_label(e["resolution"])] +
                      [fmt_bytes(b[m] + top.get(m, 0)) if m in b else "-" for m in methods] +
                      [f"{b['dagmh'] / b['mmh']:.3f}" if "dagmh" in b and "mmh" in b else "-"] +
+                     [f"{p['dagmh'] / p['mmh']:.3f}" if "dagmh" in p and "mmh" in p else "-"] +
                      [f"{t[m]:.0f}" if m in t else "-" for m in methods] +
                      [f"{st.get('seconds', {}).get('rays_thread_sum', 0):.0f}", f"{e.get('wall_s', 0):.0f}",
                       f"{st.get('peak_memory_mib', 0):.0f}"])
-    out.append(table(["scene", "res"] + [f"{m} bytes" for m in methods] + ["DAG-MH/MMH"] +
+    out.append(table(["scene", "res"] + [f"{m} bytes" for m in methods] + ["DAG-MH/MMH", "DAG-MH/MMH payload"] +
                      [f"{m} encode s" for m in methods] + ["rays Σ s", "wall s", "peak MiB"], lines))
     return out + [""]
 
@@ -286,8 +287,9 @@ def report(doc, charts, md_path, sizes=()):
            ]
     for run in doc["runs"]:
         machine, cfg = run["machine"], run.get("config", {})
-        out += [f"Run `{run['file']}`: {machine.get('cpu_model')} ({machine.get('nproc')} threads), "
-                f"{machine.get('memory_gib', 0):.0f} GiB; date {machine.get('date')}; commit `{machine.get('git_commit')}`"
+        where = (f"{machine.get('cpu_model')} ({machine.get('nproc')} threads), {machine.get('memory_gib', 0):.0f} GiB; "
+                 if machine.get("cpu_model") else "same machine; ")
+        out += [f"Run `{run['file']}`: {where}date {machine.get('date')}; commit `{machine.get('git_commit')}`"
                 f"{' (dirty tree)' if machine.get('git_dirty') else ''}. Config: {cfg.get('description', '')}", ""]
     for note in doc.get("notes", []):
         out.append(f"- Note: {note}")
@@ -379,6 +381,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("results", nargs="+", help="results.json files written by `shadowtiles bench`")
     ap.add_argument("--sizes", nargs="*", default=[], help="sizes-only runs written by bench/build_sizes.py")
+    ap.add_argument("--note", action="append", default=[], help="a note to print under the runs (repeatable)")
     ap.add_argument("--md", default="BENCHMARKS.md", help="Markdown report to write")
     ap.add_argument("--charts", default="docs/bench", help="folder for the SVG and PNG charts")
     args = ap.parse_args()
@@ -386,7 +389,13 @@ def main():
     sizes = []
     for path in args.sizes:
         with open(path) as f:
-            sizes += json.load(f)["scenes"]
+            run = json.load(f)
+        sizes += run["scenes"]
+        doc["runs"].append({"file": path, "machine": {"date": run.get("date"), "git_commit": run.get("git_commit"),
+                                                      "git_dirty": run.get("git_dirty")},
+                            "config": {"description": f"sizes-only builds at {run.get('resolution')}^2 of "
+                                                      f"{', '.join(run.get('methods', []))} (bench/build_sizes.py)"}})
+    doc["notes"] += args.note
     charts = make_charts(doc["rows"], doc.get("builds", []), args.charts)
     report(doc, charts, args.md, sizes)
     print(f"wrote {args.md} and {len(charts)} charts (SVG + PNG) in {args.charts}")
