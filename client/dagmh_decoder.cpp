@@ -9,12 +9,12 @@
 #include <string>
 
 #include "client/dagmh_format.hpp"
+#include "client/unaligned_load.hpp"
 
 namespace shadowtiles {
 namespace {
 
 namespace F = dagmh_format;
-static_assert(std::endian::native == std::endian::little, "DAG-MH payloads are read with memcpy: little-endian only");
 
 // Fixed-size reads per width: a memcpy of runtime length would be a library call on the hot path.
 inline uint32_t load_uint(const uint8_t* p, unsigned width) {
@@ -28,11 +28,6 @@ inline uint32_t load_uint(const uint8_t* p, unsigned width) {
       return x;
     }
   }
-}
-inline float load_f32(const uint8_t* p) {
-  float f;
-  std::memcpy(&f, p, 4);
-  return f;
 }
 inline unsigned child_index(uint32_t u, uint32_t v, unsigned shift) {
   return ((u >> shift) & 1u) | (((v >> shift) & 1u) << 1);

@@ -9,12 +9,12 @@
 #include <string>
 
 #include "client/mh_format.hpp"
+#include "client/unaligned_load.hpp"
 
 namespace shadowtiles {
 namespace {
 
 namespace F = mh_format;
-static_assert(std::endian::native == std::endian::little, "MH payloads are read with memcpy: little-endian only");
 
 // Per mask: how many children have records, and each child's rank among records / values, so a
 // step is two table reads instead of bit counting.
@@ -43,21 +43,6 @@ constexpr std::array<MaskInfo, 256> make_mask_info() {
 }
 constexpr std::array<MaskInfo, 256> kMaskInfo = make_mask_info();
 
-inline float load_f32(const uint8_t* p) {
-  float f;
-  std::memcpy(&f, p, 4);
-  return f;
-}
-inline uint16_t load_u16(const uint8_t* p) {
-  uint16_t x;
-  std::memcpy(&x, p, 2);
-  return x;
-}
-inline uint32_t load_u32(const uint8_t* p) {
-  uint32_t x;
-  std::memcpy(&x, p, 4);
-  return x;
-}
 template <unsigned W>
 inline uint32_t load_offset(const uint8_t* p) {
   uint32_t x = 0;

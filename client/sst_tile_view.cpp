@@ -8,28 +8,13 @@
 #include <string>
 
 #include "client/sst_format.hpp"
+#include "client/unaligned_load.hpp"
 
 namespace shadowtiles {
 namespace {
 
 namespace F = sst_format;
-static_assert(std::endian::native == std::endian::little, "SST payloads are read with memcpy: little-endian only");
 
-inline float load_f32(const uint8_t* p) {
-  float f;
-  std::memcpy(&f, p, 4);
-  return f;
-}
-inline uint16_t load_u16(const uint8_t* p) {
-  uint16_t x;
-  std::memcpy(&x, p, 2);
-  return x;
-}
-inline uint32_t load_u32(const uint8_t* p) {
-  uint32_t x;
-  std::memcpy(&x, p, 4);
-  return x;
-}
 // A child offset of `width` bytes. Reads 4 bytes: validation guarantees the three offsets are
 // followed by four child records of at least one byte each, so the over-read stays in the node.
 inline uint32_t load_offset(const uint8_t* p, unsigned width) {
