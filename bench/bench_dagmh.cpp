@@ -14,6 +14,7 @@
 #include "builder/mh_builder.hpp"
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
+#include "bench/synthetic_tile_cache.hpp"
 #include "builder/mmh_merger.hpp"
 #include "client/dagmh_decoder.hpp"
 #include "client/mh_decoder.hpp"
@@ -22,8 +23,7 @@ namespace st = shadowtiles;
 
 namespace {
 
-const st::MhSyntheticKind kKinds[] = {st::MhSyntheticKind::steps, st::MhSyntheticKind::closed_plane,
-                                      st::MhSyntheticKind::noisy_plane, st::MhSyntheticKind::random_intervals};
+using st::bench::kSyntheticKinds;
 
 // Method 0 MH, 1 MMH, 2 DAG-MH.
 struct Encoded {
@@ -38,7 +38,7 @@ const Encoded& encoded(int kind, uint32_t size, int method) {
   auto& slot = cache[{kind, size, method}];
   if (!slot) {
     slot = std::make_unique<Encoded>();
-    auto tree = *st::build_mh(st::make_synthetic_tile(kKinds[kind], size, 42));
+    auto tree = *st::build_mh(st::make_synthetic_tile(kSyntheticKinds[kind], size, 42));
     if (method == 2) {
       slot->bytes = *st::encode_dagmh(tree);
       slot->dag = *st::DagMhTileView::parse(slot->bytes);
@@ -51,13 +51,13 @@ const Encoded& encoded(int kind, uint32_t size, int method) {
 }
 
 void BM_EncodeDagMh(benchmark::State& state) {
-  auto tree = *st::build_mh(st::make_synthetic_tile(kKinds[state.range(0)], uint32_t(state.range(1)), 42));
+  auto tree = *st::build_mh(st::make_synthetic_tile(kSyntheticKinds[state.range(0)], uint32_t(state.range(1)), 42));
   std::vector<uint8_t> bytes;
   for (auto _ : state) bytes = *st::encode_dagmh(tree);
   state.counters["bytes"] = double(bytes.size());
   state.counters["mh_bytes"] = double(st::encode_mh(tree)->size());
   state.counters["mmh_bytes"] = double(st::encode_mh(*st::merge_mmh(tree))->size());
-  state.SetLabel(st::synthetic_kind_name(kKinds[state.range(0)]));
+  state.SetLabel(st::synthetic_kind_name(kSyntheticKinds[state.range(0)]));
 }
 
 void BM_ParseDagMh(benchmark::State& state) {
@@ -100,7 +100,7 @@ void BM_Lookup(benchmark::State& state) {
   benchmark::DoNotOptimize(sum);
   state.counters["lookups/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
   static const char* methods[] = {" mh ", " mmh ", " dagmh "};
-  state.SetLabel(std::string(st::synthetic_kind_name(kKinds[state.range(0)])) + methods[method] +
+  state.SetLabel(std::string(st::synthetic_kind_name(kSyntheticKinds[state.range(0)])) + methods[method] +
                  (k == 1 ? "point" : k == 3 ? "pcf3" : "pcf5") + (random ? " random" : " coherent"));
 }
 

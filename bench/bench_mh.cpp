@@ -11,6 +11,7 @@
 #include "builder/mh_builder.hpp"
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
+#include "bench/synthetic_tile_cache.hpp"
 #include "builder/mmh_merger.hpp"
 #include "client/mh_decoder.hpp"
 
@@ -18,17 +19,8 @@ namespace st = shadowtiles;
 
 namespace {
 
-const st::MhSyntheticKind kKinds[] = {st::MhSyntheticKind::steps, st::MhSyntheticKind::closed_plane,
-                                      st::MhSyntheticKind::noisy_plane, st::MhSyntheticKind::random_intervals};
-
-const st::TileIntervals& tile(int kind, uint32_t size) {
-  static std::mutex mutex;
-  static std::map<std::pair<int, uint32_t>, std::unique_ptr<st::TileIntervals>> cache;
-  std::lock_guard lock(mutex);
-  auto& slot = cache[{kind, size}];
-  if (!slot) slot = std::make_unique<st::TileIntervals>(st::make_synthetic_tile(kKinds[kind], size, 42));
-  return *slot;
-}
+using st::bench::kSyntheticKinds;
+const st::TileIntervals& tile(int kind, uint32_t size) { return st::bench::cached_synthetic_tile(kind, size); }
 
 struct Encoded {
   std::vector<uint8_t> bytes;
@@ -58,7 +50,7 @@ void BM_Build(benchmark::State& state) {
   const auto mh = *st::encode_mh(tree);
   st::MmhMergeStats stats;
   const auto mmh = *st::encode_mh(*st::merge_mmh(tree, {}, &stats));
-  state.SetLabel(std::string(st::synthetic_kind_name(kKinds[kind])) + (state.range(2) ? " top-down" : " bottom-up"));
+  state.SetLabel(std::string(st::synthetic_kind_name(kSyntheticKinds[kind])) + (state.range(2) ? " top-down" : " bottom-up"));
   state.counters["raw_B"] = double(size) * size * 4;
   state.counters["mh_B"] = double(mh.size());
   state.counters["mmh_B"] = double(mmh.size());
@@ -70,20 +62,20 @@ void BM_Build(benchmark::State& state) {
 void BM_Merge(benchmark::State& state) {
   const auto tree = *st::build_mh(tile(int(state.range(0)), uint32_t(state.range(1))));
   for (auto _ : state) benchmark::DoNotOptimize(st::merge_mmh(tree));
-  state.SetLabel(st::synthetic_kind_name(kKinds[state.range(0)]));
+  state.SetLabel(st::synthetic_kind_name(kSyntheticKinds[state.range(0)]));
 }
 
 void BM_Encode(benchmark::State& state) {
   const auto tree = *st::build_mh(tile(int(state.range(0)), uint32_t(state.range(1))));
   for (auto _ : state) benchmark::DoNotOptimize(st::encode_mh(tree));
-  state.SetLabel(st::synthetic_kind_name(kKinds[state.range(0)]));
+  state.SetLabel(st::synthetic_kind_name(kSyntheticKinds[state.range(0)]));
 }
 
 void BM_Parse(benchmark::State& state) {
   const Encoded& e = encoded(int(state.range(0)), uint32_t(state.range(1)), state.range(2));
   for (auto _ : state) benchmark::DoNotOptimize(st::MhTileView::parse(e.bytes));
   state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(e.bytes.size()));
-  state.SetLabel(std::string(st::synthetic_kind_name(kKinds[state.range(0)])) + (state.range(2) ? " mmh" : " mh"));
+  state.SetLabel(std::string(st::synthetic_kind_name(kSyntheticKinds[state.range(0)])) + (state.range(2) ? " mmh" : " mh"));
 }
 
 // range: kind, size, merged, mode (0 point row order, 1 point random, 3 / 5 PCF k random).
@@ -113,7 +105,7 @@ void BM_Lookup(benchmark::State& state) {
   benchmark::DoNotOptimize(sum);
   state.counters["lookups/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
   static const char* modes[] = {"point row-order", "point random", "", "pcf3 random", "", "pcf5 random"};
-  state.SetLabel(std::string(st::synthetic_kind_name(kKinds[state.range(0)])) + (state.range(2) ? " mmh " : " mh ") +
+  state.SetLabel(std::string(st::synthetic_kind_name(kSyntheticKinds[state.range(0)])) + (state.range(2) ? " mmh " : " mh ") +
                  modes[mode]);
 }
 

@@ -11,6 +11,7 @@
 #include "builder/mh_builder.hpp"
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
+#include "bench/synthetic_tile_cache.hpp"
 #include "builder/sst_encoder.hpp"
 #include "client/mh_decoder.hpp"
 #include "client/sst_tile_view.hpp"
@@ -19,17 +20,8 @@ namespace st = shadowtiles;
 
 namespace {
 
-const st::MhSyntheticKind kKinds[] = {st::MhSyntheticKind::steps, st::MhSyntheticKind::closed_plane,
-                                      st::MhSyntheticKind::noisy_plane, st::MhSyntheticKind::random_intervals};
-
-const st::TileIntervals& tile(int kind, uint32_t size) {
-  static std::mutex mutex;
-  static std::map<std::pair<int, uint32_t>, std::unique_ptr<st::TileIntervals>> cache;
-  std::lock_guard lock(mutex);
-  auto& slot = cache[{kind, size}];
-  if (!slot) slot = std::make_unique<st::TileIntervals>(st::make_synthetic_tile(kKinds[kind], size, 42));
-  return *slot;
-}
+using st::bench::kSyntheticKinds;
+const st::TileIntervals& tile(int kind, uint32_t size) { return st::bench::cached_synthetic_tile(kind, size); }
 
 struct Encoded {
   std::vector<uint8_t> sst_bytes, mh_bytes;
@@ -58,7 +50,7 @@ void BM_SstEncode(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(st::encode_sst_tile(t));
   const Encoded& e = encoded(kind, size);
   const st::SstStats& s = e.sst.stats();
-  state.SetLabel(st::synthetic_kind_name(kKinds[kind]));
+  state.SetLabel(st::synthetic_kind_name(kSyntheticKinds[kind]));
   state.counters["raw_B"] = double(size) * size * 4;
   state.counters["sst_B"] = double(e.sst_bytes.size());
   state.counters["mh_B"] = double(e.mh_bytes.size());
@@ -71,7 +63,7 @@ void BM_SstParse(benchmark::State& state) {
   const Encoded& e = encoded(int(state.range(0)), uint32_t(state.range(1)));
   for (auto _ : state) benchmark::DoNotOptimize(st::SstTileView::parse(e.sst_bytes));
   state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(e.sst_bytes.size()));
-  state.SetLabel(st::synthetic_kind_name(kKinds[state.range(0)]));
+  state.SetLabel(st::synthetic_kind_name(kSyntheticKinds[state.range(0)]));
 }
 
 // range: kind, size, method (0 SST, 1 MH), mode (0 point row order, 1 point random, 3 / 5 PCF k random).
@@ -106,7 +98,7 @@ void BM_Lookup(benchmark::State& state) {
   benchmark::DoNotOptimize(sum);
   state.counters["lookups/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
   static const char* modes[] = {"point row-order", "point random", "", "pcf3 random", "", "pcf5 random"};
-  state.SetLabel(std::string(st::synthetic_kind_name(kKinds[state.range(0)])) + (sst ? " sst " : " mh ") +
+  state.SetLabel(std::string(st::synthetic_kind_name(kSyntheticKinds[state.range(0)])) + (sst ? " sst " : " mh ") +
                  modes[mode]);
 }
 
