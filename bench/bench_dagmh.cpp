@@ -16,8 +16,8 @@
 #include "builder/mh_synthetic.hpp"
 #include "bench/synthetic_tile_cache.hpp"
 #include "builder/mmh_merger.hpp"
-#include "client/dagmh_decoder.hpp"
-#include "client/mh_decoder.hpp"
+#include "codec/dagmh_decoder.hpp"
+#include "codec/mh_decoder.hpp"
 
 namespace st = shadowtiles;
 

@@ -13,7 +13,7 @@
 #include "builder/mh_synthetic.hpp"
 #include "bench/synthetic_tile_cache.hpp"
 #include "builder/mmh_merger.hpp"
-#include "client/mh_decoder.hpp"
+#include "codec/mh_decoder.hpp"
 
 namespace st = shadowtiles;
 

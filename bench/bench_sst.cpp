@@ -13,8 +13,8 @@
 #include "builder/mh_synthetic.hpp"
 #include "bench/synthetic_tile_cache.hpp"
 #include "builder/sst_encoder.hpp"
-#include "client/mh_decoder.hpp"
-#include "client/sst_tile_view.hpp"
+#include "codec/mh_decoder.hpp"
+#include "codec/sst_tile_view.hpp"
 
 namespace st = shadowtiles;
 

@@ -23,7 +23,7 @@
 #include "builder/mh_encoder.hpp"
 #include "builder/mmh_merger.hpp"
 #include "builder/tile_encoder.hpp"
-#include "client/store_meta.hpp"
+#include "codec/store_meta.hpp"
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
 #include "store/serving_lock.hpp"

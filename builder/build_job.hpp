@@ -22,9 +22,9 @@
 
 #include "builder/mh_builder.hpp"
 #include "builder/scene_loader.hpp"
-#include "client/light_frame.hpp"
+#include "codec/light_frame.hpp"
 #include "store/method.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

@@ -1,4 +1,4 @@
-// Min-max hierarchy over a tile's per-texel step bounds (client/cpvs_format.hpp StepBounds): for any
+// Min-max hierarchy over a tile's per-texel step bounds (codec/cpvs_format.hpp StepBounds): for any
 // square block, the largest lit_end and the smallest shadow_begin of its texels. The CPVS builder
 // asks it whether a voxel node is wholly lit-or-free (depth end <= min shadow_begin) or wholly
 // shadowed-or-free (depth start >= max lit_end) without visiting the node's texels.
@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "builder/depth_interval.hpp"
-#include "client/cpvs_format.hpp"
+#include "codec/cpvs_format.hpp"
 
 namespace shadowtiles {
 

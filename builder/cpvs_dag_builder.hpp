@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "builder/depth_interval.hpp"
-#include "client/cpvs_format.hpp"
-#include "store/result.hpp"
+#include "codec/cpvs_format.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 
@@ -34,7 +34,7 @@ struct CpvsBuildOptions {
 };
 
 struct CpvsNode {
-  uint16_t codes = 0;                 // 2-bit child codes (client/cpvs_format.hpp)
+  uint16_t codes = 0;                 // 2-bit child codes (codec/cpvs_format.hpp)
   std::array<uint32_t, 8> refs{};     // ids in the next level (or leaf ids), code-2 children in order; rest 0
   uint8_t ref_count = 0;
   bool operator==(const CpvsNode&) const = default;

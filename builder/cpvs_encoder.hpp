@@ -1,5 +1,5 @@
 // CPVS encoder (DESIGN.md §8, seed 004): a tile's dual depth -> voxelized-shadow DAG payload
-// (format: client/cpvs_format.hpp, docs/cpvs.md). Binary visibility over (u, v, depth step) with the
+// (format: codec/cpvs_format.hpp, docs/cpvs.md). Binary visibility over (u, v, depth step) with the
 // map's side as depth resolution: lossy by that quantisation only (see cpvs::step_bounds).
 // Errors: invalid_input for malformed intervals or a map resolution outside [tile side, 2^20].
 // Thread safety: stateless; call concurrently.
@@ -10,7 +10,7 @@
 
 #include "builder/cpvs_dag_builder.hpp"
 #include "builder/depth_interval.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

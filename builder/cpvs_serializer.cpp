@@ -38,22 +38,22 @@ Result<std::vector<uint8_t>> serialize_cpvs_dag(const CpvsDag& dag) {
   std::vector<uint8_t> out(total, 0);
   uint8_t* p = out.data();
   std::memcpy(p + cpvs::kOffMagic, cpvs::kMagic, 4);
-  cpvs::store_le16(p + cpvs::kOffVersion, cpvs::kFormatVersion);
+  bytes::store_le<uint16_t>(p + cpvs::kOffVersion, cpvs::kFormatVersion);
   p[cpvs::kOffLayout] = uint8_t(dag.layout);
   p[cpvs::kOffRootCode] = uint8_t(dag.root_code);
-  cpvs::store_le32(p + cpvs::kOffTileSize, dag.tile_size);
-  cpvs::store_le32(p + cpvs::kOffDepthSteps, dag.depth_steps);
-  cpvs::store_le32(p + cpvs::kOffLevelCount, uint32_t(levels));
-  cpvs::store_le32(p + cpvs::kOffLeafCount, uint32_t(dag.leaves.size()));
+  bytes::store_le<uint32_t>(p + cpvs::kOffTileSize, dag.tile_size);
+  bytes::store_le<uint32_t>(p + cpvs::kOffDepthSteps, dag.depth_steps);
+  bytes::store_le<uint32_t>(p + cpvs::kOffLevelCount, uint32_t(levels));
+  bytes::store_le<uint32_t>(p + cpvs::kOffLeafCount, uint32_t(dag.leaves.size()));
   size_t at = cpvs::kHeaderBytes;
   for (size_t l = 0; l < levels; ++l, at += cpvs::kLevelEntryBytes) {
-    cpvs::store_le32(p + at, uint32_t(level_bytes[l]));
+    bytes::store_le<uint32_t>(p + at, uint32_t(level_bytes[l]));
     p[at + 4] = uint8_t(widths[l]);
   }
   for (size_t l = 0; l < levels; ++l) {
     const bool last = l + 1 == levels;
     for (const CpvsNode& node : dag.levels[l]) {
-      cpvs::store_le16(p + at, node.codes);
+      bytes::store_le<uint16_t>(p + at, node.codes);
       at += 2;
       for (unsigned i = 0; i < node.ref_count; ++i) {
         uint32_t target = node.refs[i];
@@ -63,7 +63,7 @@ Result<std::vector<uint8_t>> serialize_cpvs_dag(const CpvsDag& dag) {
     }
   }
   for (uint64_t mask : dag.leaves) {
-    cpvs::store_le64(p + at, mask);
+    bytes::store_le<uint64_t>(p + at, mask);
     at += 8;
   }
   return out;

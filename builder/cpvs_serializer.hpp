@@ -1,5 +1,5 @@
 // CPVS serialisation: an in-memory DAG (builder/cpvs_dag_builder.hpp) -> the payload bytes of
-// client/cpvs_format.hpp. Refs are byte offsets into the next level (or leaf indices), each level
+// codec/cpvs_format.hpp. Refs are byte offsets into the next level (or leaf indices), each level
 // with the narrowest ref width (1..4 bytes) its targets need.
 // Errors: invalid_input when a level would exceed 4 GiB or the DAG is inconsistent.
 // Thread safety: stateless.
@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "builder/cpvs_dag_builder.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

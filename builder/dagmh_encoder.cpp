@@ -9,8 +9,8 @@
 #include <string>
 #include <unordered_map>
 
-#include "client/dagmh_format.hpp"
-#include "client/mh_format.hpp"
+#include "codec/dagmh_format.hpp"
+#include "codec/mh_format.hpp"
 
 namespace shadowtiles {
 namespace {

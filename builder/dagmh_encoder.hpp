@@ -1,5 +1,5 @@
 // DAG-MH encoder (DESIGN.md §7; SE21): an MhHierarchy (MH tree or MMH; shared blocks are expanded)
-// becomes the payload of client/dagmh_format.hpp (docs/dagmh.md), read by client/dagmh_decoder.
+// becomes the payload of codec/dagmh_format.hpp (docs/dagmh.md), read by codec/dagmh_decoder.
 // - Topology only goes into a DAG: identical subtree shapes (node kinds, not values) share one node.
 //   Deduplication compares keys in full; the hash only buckets (options.hash_bits is a test hook).
 // - Subtrees of at most `treelet_height` levels become depth-first valued-node bitmaps (treelets),
@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "builder/mh_hierarchy.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 
@@ -46,7 +46,7 @@ Status for_each_dagmh_parameter(const MhHierarchy& hierarchy, const std::vector<
 // `treelets` for code 2), treelet bitmaps, the root's code and id, the tile's value count.
 struct DagMhTopology {
   struct Node {
-    uint8_t mask = 0;  // 2-bit child codes (client/dagmh_format.hpp)
+    uint8_t mask = 0;  // 2-bit child codes (codec/dagmh_format.hpp)
     bool valued = false;
     uint32_t child_id[4] = {0, 0, 0, 0};
   };

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "client/dagmh_format.hpp"
+#include "codec/dagmh_format.hpp"
 
 namespace shadowtiles {
 namespace {

@@ -2,7 +2,7 @@
 // per-tile DAGs DAG-MH stores (issue #4, "a DAG shared across all tiles"). Tiles are added one at
 // a time (their topology only: dagmh_topology); shapes are hash-consed into one global dictionary
 // with full-key comparison, as the per-tile encoder does.
-// Accounting (bytes, the DAG-MH node layout of client/dagmh_format.hpp):
+// Accounting (bytes, the DAG-MH node layout of codec/dagmh_format.hpp):
 // - per-tile: each tile's DAG nodes and treelets with that tile's ref/count widths;
 // - shared: the dictionary's distinct nodes and treelets with the map-wide widths, plus a root ref
 //   per tile (the tile would keep its header and values). The dictionary must be fetched before

@@ -5,7 +5,7 @@
 
 #include <embree3/rtcore.h>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 Result<uint64_t> hash_file(const std::filesystem::path& path);

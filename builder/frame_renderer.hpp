@@ -13,7 +13,7 @@
 #include "builder/embree_device.hpp"
 #include "builder/scene.hpp"
 #include "client/streaming_camera.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "builder/scene.hpp"
-#include "client/light_frame.hpp"
-#include "client/tile_layout.hpp"
+#include "codec/light_frame.hpp"
+#include "codec/tile_layout.hpp"
 
 namespace shadowtiles {
 

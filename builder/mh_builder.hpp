@@ -19,7 +19,7 @@
 
 #include "builder/depth_interval.hpp"
 #include "builder/mh_hierarchy.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

@@ -4,7 +4,7 @@
 #include <cassert>
 #include <limits>
 
-#include "client/mh_format.hpp"
+#include "codec/mh_format.hpp"
 
 namespace shadowtiles {
 namespace F = mh_format;

@@ -5,7 +5,7 @@
 #include <cstring>
 #include <string>
 
-#include "client/mh_format.hpp"
+#include "codec/mh_format.hpp"
 
 namespace shadowtiles {
 namespace F = mh_format;

@@ -1,5 +1,5 @@
-// Encodes an MhHierarchy (MH or MMH) into the random-access payload of client/mh_format.hpp
-// (docs/mh.md), read by client/mh_decoder. Values are mh_value_for(interval) (finite, inside the
+// Encodes an MhHierarchy (MH or MMH) into the random-access payload of codec/mh_format.hpp
+// (docs/mh.md), read by codec/mh_decoder. Values are mh_value_for(interval) (finite, inside the
 // interval). Blocks are laid out tallest subtree first, so offsets point forward; the offset width
 // is the smallest of 1..4 bytes that addresses the node stream.
 // Errors: invalid_input for a malformed hierarchy (check_structure) or a node stream over 4 GiB.
@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "builder/mh_hierarchy.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

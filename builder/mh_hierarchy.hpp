@@ -5,7 +5,7 @@
 // The encoder picks the values (mh_value_for).
 //
 // Child codes (2 bits per child i in a block mask): 00 absent, 01 leaf, 10 empty, 11 inner, as in
-// the payload format (client/mh_format.hpp). A block is shared by several parents in an MMH.
+// the payload format (codec/mh_format.hpp). A block is shared by several parents in an MMH.
 // Thread safety: plain value type.
 #pragma once
 
@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "builder/depth_interval.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

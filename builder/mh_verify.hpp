@@ -9,8 +9,8 @@
 #include <cstdint>
 
 #include "builder/depth_interval.hpp"
-#include "client/mh_decoder.hpp"
-#include "store/result.hpp"
+#include "codec/mh_decoder.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

@@ -4,7 +4,7 @@
 #include <limits>
 #include <unordered_map>
 
-#include "client/mh_format.hpp"
+#include "codec/mh_format.hpp"
 
 namespace shadowtiles {
 namespace F = mh_format;

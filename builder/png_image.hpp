@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

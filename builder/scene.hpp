@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "client/light_frame.hpp"
+#include "codec/light_frame.hpp"
 
 namespace shadowtiles {
 

@@ -48,8 +48,8 @@
 #include <vector>
 
 #include "builder/scene.hpp"
-#include "client/light_frame.hpp"
-#include "store/result.hpp"
+#include "codec/light_frame.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "builder/sst_plane_fit.hpp"
-#include "client/sst_format.hpp"
+#include "codec/sst_format.hpp"
 
 namespace shadowtiles {
 namespace {

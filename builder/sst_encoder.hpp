@@ -1,5 +1,5 @@
 // SST encoder (DESIGN.md §8, seed 002): a tile's dual depth -> sparse shadow tree payload
-// (client/sst_format.hpp, docs/sst.md).
+// (codec/sst_format.hpp, docs/sst.md).
 // Per block of min(128, size)^2 texels a quadtree; each node takes the cheapest record that keeps
 // every texel of the node inside its interval, tried in order of size: the value 1 (misses), one
 // constant, one quantised plane (builder/sst_plane_fit, verified with the decoder's expression);
@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "builder/depth_interval.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

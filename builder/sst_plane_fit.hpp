@@ -1,4 +1,4 @@
-// SST plane fit: a quantised plane d(x, y) (client/sst_format.hpp) that stays inside [lower, upper]
+// SST plane fit: a quantised plane d(x, y) (codec/sst_format.hpp) that stays inside [lower, upper]
 // for every texel of a square region of a tile, or nothing when none is found.
 //
 // Finding a plane inside all intervals is a 3-variable LP feasibility problem. We solve it
@@ -15,7 +15,7 @@
 #include <optional>
 
 #include "builder/depth_interval.hpp"
-#include "client/sst_format.hpp"
+#include "codec/sst_format.hpp"
 
 namespace shadowtiles {
 

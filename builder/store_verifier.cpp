@@ -8,7 +8,7 @@
 
 #include "builder/dual_depth_renderer.hpp"
 #include "builder/light_space_scene.hpp"
-#include "client/cpvs_format.hpp"
+#include "codec/cpvs_format.hpp"
 
 namespace shadowtiles {
 namespace {

@@ -9,7 +9,7 @@
 #include "builder/mh_hierarchy.hpp"
 #include "builder/mmh_merger.hpp"
 #include "builder/sst_encoder.hpp"
-#include "client/raw_tile.hpp"
+#include "codec/raw_tile.hpp"
 
 namespace shadowtiles {
 namespace {

@@ -11,7 +11,7 @@
 #include "builder/depth_interval.hpp"
 #include "builder/mh_builder.hpp"
 #include "store/method.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

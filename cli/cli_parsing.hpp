@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "client/light_frame.hpp"
-#include "store/result.hpp"
+#include "codec/light_frame.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles::cli {
 

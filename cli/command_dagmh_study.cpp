@@ -28,10 +28,10 @@
 #include "cli/cli_parsing.hpp"
 #include "cli/commands.hpp"
 #include "cli/exit_codes.hpp"
-#include "client/dagmh_decoder.hpp"
-#include "client/light_frame.hpp"
-#include "client/mh_decoder.hpp"
-#include "client/tile_layout.hpp"
+#include "codec/dagmh_decoder.hpp"
+#include "codec/light_frame.hpp"
+#include "codec/mh_decoder.hpp"
+#include "codec/tile_layout.hpp"
 
 namespace shadowtiles::cli {
 namespace {

@@ -4,7 +4,7 @@
 //   4 the store is corrupt (blob or meta fails its checks).
 #pragma once
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles::cli {
 

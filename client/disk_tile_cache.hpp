@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

@@ -6,7 +6,7 @@
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
-#include "client/store_meta.hpp"
+#include "codec/store_meta.hpp"
 #include "store/blob.hpp"
 
 namespace shadowtiles {

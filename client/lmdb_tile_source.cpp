@@ -1,6 +1,6 @@
 #include "client/lmdb_tile_source.hpp"
 
-#include "client/store_meta.hpp"
+#include "codec/store_meta.hpp"
 
 namespace shadowtiles {
 

@@ -21,9 +21,9 @@
 
 #include <span>
 
-#include "client/decoded_tile.hpp"
+#include "codec/decoded_tile.hpp"
 #include "client/lmdb_tile_source.hpp"
-#include "client/store_meta.hpp"
+#include "codec/store_meta.hpp"
 #include "client/tile_source.hpp"
 #include "store/lmdb_store.hpp"
 #include "store/tile_key.hpp"

@@ -8,8 +8,8 @@
 #include <array>
 #include <cstdint>
 
-#include "client/light_frame.hpp"
-#include "store/result.hpp"
+#include "codec/light_frame.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

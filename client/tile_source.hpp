@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "store/method.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 #include "store/tile_key.hpp"
 
 namespace shadowtiles {

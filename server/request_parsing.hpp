@@ -21,9 +21,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "client/light_frame.hpp"
+#include "codec/light_frame.hpp"
 #include "store/method.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles::server {
 

@@ -3,7 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include "server/http_response.hpp"
-#include "client/store_meta.hpp"
+#include "codec/store_meta.hpp"
 #include "server/request_parsing.hpp"
 #include "store/blob.hpp"
 #include "store/tile_key.hpp"

@@ -28,7 +28,7 @@
 #include <string>
 
 #include "server/server_config.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 class ShadowMap;

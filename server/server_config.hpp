@@ -16,7 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles::server {
 

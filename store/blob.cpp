@@ -10,7 +10,7 @@
 #include <memory>
 #include <new>
 
-#include "store/byte_order.hpp"
+#include "common/byte_order.hpp"
 
 namespace shadowtiles::store {
 
@@ -84,14 +84,14 @@ std::vector<uint8_t> encode_blob(Method method, std::span<const uint8_t> raw_pay
 
   uint8_t* h = blob.data();
   std::memcpy(h, kBlobMagic, sizeof(kBlobMagic));
-  detail::store_le<uint16_t>(h + kVersionOffset, kBlobFormatVersion);
+  bytes::store_le<uint16_t>(h + kVersionOffset, kBlobFormatVersion);
   h[kMethodOffset] = static_cast<uint8_t>(method);
   h[kFlagsOffset] = flags;
-  detail::store_le<uint64_t>(h + kRawSizeOffset, raw_payload.size());
-  detail::store_le<uint64_t>(h + kPayloadSizeOffset, payload_size);
+  bytes::store_le<uint64_t>(h + kRawSizeOffset, raw_payload.size());
+  bytes::store_le<uint64_t>(h + kPayloadSizeOffset, payload_size);
   const uint64_t checksum = blob_checksum(std::span(h, kChecksumOffset),
                                           std::span(blob).subspan(kBlobHeaderSize));
-  detail::store_le<uint64_t>(h + kChecksumOffset, checksum);
+  bytes::store_le<uint64_t>(h + kChecksumOffset, checksum);
   return blob;
 }
 
@@ -103,7 +103,7 @@ Result<BlobHeader> check_blob(std::span<const uint8_t> blob) {
   if (std::memcmp(h, kBlobMagic, sizeof(kBlobMagic)) != 0) return corrupt("wrong magic");
 
   BlobHeader header{};
-  header.format_version = detail::load_le<uint16_t>(h + kVersionOffset);
+  header.format_version = bytes::load_le<uint16_t>(h + kVersionOffset);
   // Version before checksum: a future version may checksum differently.
   if (header.format_version == 0) return corrupt("format version 0");
   if (header.format_version > kBlobFormatVersion) {
@@ -113,9 +113,9 @@ Result<BlobHeader> check_blob(std::span<const uint8_t> blob) {
                           std::to_string(kBlobFormatVersion) + ")");
   }
   header.flags = h[kFlagsOffset];
-  header.raw_size = detail::load_le<uint64_t>(h + kRawSizeOffset);
-  header.payload_size = detail::load_le<uint64_t>(h + kPayloadSizeOffset);
-  header.checksum = detail::load_le<uint64_t>(h + kChecksumOffset);
+  header.raw_size = bytes::load_le<uint64_t>(h + kRawSizeOffset);
+  header.payload_size = bytes::load_le<uint64_t>(h + kPayloadSizeOffset);
+  header.checksum = bytes::load_le<uint64_t>(h + kChecksumOffset);
 
   const uint64_t available = blob.size() - kBlobHeaderSize;
   if (header.payload_size != available) {

@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "store/method.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles::store {
 

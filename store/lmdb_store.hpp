@@ -47,7 +47,7 @@
 #include <string_view>
 #include <vector>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 #include "store/txn_gate.hpp"
 
 // LMDB's handle types, declared here so includers do not need lmdb.h.

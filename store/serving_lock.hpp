@@ -11,7 +11,7 @@
 
 #include <filesystem>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles::store {
 

@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "store/byte_order.hpp"
+#include "common/byte_order.hpp"
 
 namespace shadowtiles::store {
 
@@ -10,8 +10,8 @@ std::array<uint8_t, kTileKeySize> encode_tile_key(const TileKey& key) {
   std::array<uint8_t, kTileKeySize> bytes{};
   bytes[0] = static_cast<uint8_t>(key.method);
   bytes[1] = key.level;
-  detail::store_be<uint32_t>(bytes.data() + 2, key.x);
-  detail::store_be<uint32_t>(bytes.data() + 6, key.y);
+  bytes::store_be<uint32_t>(bytes.data() + 2, key.x);
+  bytes::store_be<uint32_t>(bytes.data() + 6, key.y);
   return bytes;
 }
 
@@ -23,8 +23,8 @@ Result<TileKey> decode_tile_key(std::span<const uint8_t> bytes) {
   }
   Result<Method> method = method_from_byte(bytes[0]);
   if (!method) return make_error(ErrorCode::invalid_input, "tile key: " + method.error().message);
-  return TileKey{*method, bytes[1], detail::load_be<uint32_t>(bytes.data() + 2),
-                 detail::load_be<uint32_t>(bytes.data() + 6)};
+  return TileKey{*method, bytes[1], bytes::load_be<uint32_t>(bytes.data() + 2),
+                 bytes::load_be<uint32_t>(bytes.data() + 6)};
 }
 
 std::array<uint8_t, kTileKeyPrefixSize> tile_key_prefix(Method method, uint8_t level) {

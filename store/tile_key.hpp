@@ -13,7 +13,7 @@
 #include <span>
 
 #include "store/method.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles::store {
 

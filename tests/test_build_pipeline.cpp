@@ -11,7 +11,7 @@
 #include "builder/ground_truth.hpp"
 #include "builder/receiver_sampler.hpp"
 #include "builder/scene_loader.hpp"
-#include "client/raw_tile.hpp"
+#include "codec/raw_tile.hpp"
 #include "client/shadow_map.hpp"
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"

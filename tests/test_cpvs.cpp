@@ -10,8 +10,8 @@
 #include <random>
 
 #include "builder/cpvs_encoder.hpp"
-#include "client/cpvs_decoder.hpp"
-#include "client/cpvs_tile_view.hpp"
+#include "codec/cpvs_decoder.hpp"
+#include "codec/cpvs_tile_view.hpp"
 #include "store/method.hpp"
 
 namespace shadowtiles {

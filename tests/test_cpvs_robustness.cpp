@@ -6,8 +6,8 @@
 #include <random>
 
 #include "builder/cpvs_encoder.hpp"
-#include "client/cpvs_decoder.hpp"
-#include "client/cpvs_tile_view.hpp"
+#include "codec/cpvs_decoder.hpp"
+#include "codec/cpvs_tile_view.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -94,7 +94,7 @@ TEST(CpvsRobustness, RandomGarbageAndHostileHeadersAreRefused) {
   std::vector<uint8_t> payload = sample_payload(cpvs::LeafLayout::slab8);
   auto with = [&](size_t offset, uint32_t value) {
     std::vector<uint8_t> copy = payload;
-    cpvs::store_le32(copy.data() + offset, value);
+    bytes::store_le<uint32_t>(copy.data() + offset, value);
     return CpvsTileView::parse(copy).ok();
   };
   EXPECT_FALSE(with(cpvs::kOffDepthSteps, 1u << 30)) << "depth steps beyond 2^20";

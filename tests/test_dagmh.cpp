@@ -14,7 +14,7 @@
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
 #include "builder/mmh_merger.hpp"
-#include "client/dagmh_decoder.hpp"
+#include "codec/dagmh_decoder.hpp"
 
 namespace shadowtiles {
 namespace {

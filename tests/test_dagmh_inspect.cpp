@@ -13,7 +13,7 @@
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
 #include "builder/mmh_merger.hpp"
-#include "client/decoded_tile.hpp"
+#include "codec/decoded_tile.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles {

@@ -11,8 +11,8 @@
 #include "builder/dagmh_encoder.hpp"
 #include "builder/mh_builder.hpp"
 #include "builder/mh_synthetic.hpp"
-#include "client/dagmh_decoder.hpp"
-#include "client/dagmh_format.hpp"
+#include "codec/dagmh_decoder.hpp"
+#include "codec/dagmh_format.hpp"
 
 namespace shadowtiles {
 namespace {

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <random>
 
-#include "client/light_frame.hpp"
-#include "client/tile_layout.hpp"
+#include "codec/light_frame.hpp"
+#include "codec/tile_layout.hpp"
 
 namespace shadowtiles {
 namespace {

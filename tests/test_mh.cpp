@@ -11,7 +11,7 @@
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
 #include "builder/mh_verify.hpp"
-#include "client/mh_decoder.hpp"
+#include "codec/mh_decoder.hpp"
 
 namespace shadowtiles {
 namespace {

@@ -9,7 +9,7 @@
 #include "builder/mh_synthetic.hpp"
 #include "builder/mh_verify.hpp"
 #include "builder/mmh_merger.hpp"
-#include "client/mh_decoder.hpp"
+#include "codec/mh_decoder.hpp"
 
 namespace shadowtiles {
 namespace {

@@ -7,7 +7,7 @@
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
 #include "builder/mmh_merger.hpp"
-#include "client/mh_decoder.hpp"
+#include "codec/mh_decoder.hpp"
 
 namespace shadowtiles {
 namespace {

@@ -12,8 +12,8 @@
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
 #include "builder/mmh_merger.hpp"
-#include "client/mh_decoder.hpp"
-#include "client/mh_format.hpp"
+#include "codec/mh_decoder.hpp"
+#include "codec/mh_format.hpp"
 
 namespace shadowtiles {
 namespace {

@@ -22,7 +22,7 @@
 #include "builder/receiver_sampler.hpp"
 #include "builder/scene_loader.hpp"
 #include "client/shadow_map.hpp"
-#include "client/store_meta.hpp"
+#include "codec/store_meta.hpp"
 #include "server/routes_blobs.hpp"
 #include "server/server.hpp"
 #include "store/blob.hpp"

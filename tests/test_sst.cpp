@@ -11,9 +11,9 @@
 #include "builder/mh_synthetic.hpp"
 #include "builder/sst_encoder.hpp"
 #include "builder/sst_plane_fit.hpp"
-#include "client/decoded_tile.hpp"
-#include "client/sst_format.hpp"
-#include "client/sst_tile_view.hpp"
+#include "codec/decoded_tile.hpp"
+#include "codec/sst_format.hpp"
+#include "codec/sst_tile_view.hpp"
 
 namespace shadowtiles {
 namespace {

@@ -22,7 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/harness/bench_config.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles::bench {
 

@@ -11,7 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles::bench {
 

@@ -18,7 +18,7 @@
 #include "builder/dual_depth_renderer.hpp"
 #include "builder/light_space_scene.hpp"
 #include "builder/tile_encoder.hpp"
-#include "client/decoded_tile.hpp"
+#include "codec/decoded_tile.hpp"
 #include "store/blob.hpp"
 
 namespace shadowtiles::bench {

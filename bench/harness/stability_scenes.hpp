@@ -6,7 +6,7 @@
 
 #include <filesystem>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles::bench {
 

@@ -2,7 +2,7 @@
 
 #include <vector>
 
-#include "client/raw_tile.hpp"
+#include "codec/raw_tile.hpp"
 #include "store/blob.hpp"
 #include "store/tile_key.hpp"
 

@@ -10,7 +10,7 @@
 
 #include "client/shadow_map.hpp"
 #include "store/method.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles::bench {
 

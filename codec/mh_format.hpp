@@ -1,5 +1,5 @@
 // MH/MMH tile payload format, shared by the encoder (builder/mh_encoder) and the decoder
-// (client/mh_decoder). FORMAT-DEFINING: changing anything here changes stored bytes; bump
+// (codec/mh_decoder). FORMAT-DEFINING: changing anything here changes stored bytes; bump
 // kMhFormatVersion and keep golden payloads of released versions in tests. Full description:
 // docs/mh.md.
 //

@@ -1,4 +1,4 @@
-#include "client/raw_tile.hpp"
+#include "codec/raw_tile.hpp"
 
 #include <bit>
 #include <cstring>

@@ -1,4 +1,4 @@
-#include "client/mh_decoder.hpp"
+#include "codec/mh_decoder.hpp"
 
 #include <algorithm>
 #include <array>
@@ -8,10 +8,11 @@
 #include <cstring>
 #include <string>
 
-#include "client/mh_format.hpp"
-#include "client/unaligned_load.hpp"
+#include "codec/mh_format.hpp"
+#include "common/byte_order.hpp"
 
 namespace shadowtiles {
+using namespace bytes;  // payload field loads (common/byte_order.hpp)
 namespace {
 
 namespace F = mh_format;

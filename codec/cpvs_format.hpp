@@ -1,5 +1,5 @@
 // CPVS tile payload format (compact precomputed voxelized shadows, DESIGN.md §8, seed 004), shared
-// by the encoder (builder/cpvs_*) and the decoder (client/cpvs_decoder). FORMAT-DEFINING: changing
+// by the encoder (builder/cpvs_*) and the decoder (codec/cpvs_decoder). FORMAT-DEFINING: changing
 // anything here changes stored bytes; bump kFormatVersion. Full description: docs/cpvs.md.
 //
 // The tile is a cube of N x N x N voxels (u, v, depth step), N = depth_steps(): texels outside the
@@ -15,6 +15,8 @@
 //   is the byte offset of a node in the next level's region, or a leaf index from the last level.
 // Octree child index: bit 0 = upper u half, bit 1 = upper v half, bit 2 = upper depth half.
 #pragma once
+
+#include "common/byte_order.hpp"
 
 #include <bit>
 #include <cmath>
@@ -98,28 +100,8 @@ inline StepBounds step_bounds(float lower, float upper, uint32_t depth_steps) {
   return {uint32_t(a), uint32_t(b)};
 }
 
-inline void store_le16(uint8_t* out, uint16_t v) { out[0] = uint8_t(v); out[1] = uint8_t(v >> 8); }
-inline void store_le32(uint8_t* out, uint32_t v) {
-  for (int i = 0; i < 4; ++i) out[i] = uint8_t(v >> (8 * i));
-}
-inline void store_le64(uint8_t* out, uint64_t v) {
-  for (int i = 0; i < 8; ++i) out[i] = uint8_t(v >> (8 * i));
-}
-inline uint16_t load_le16(const uint8_t* in) { return uint16_t(in[0] | (in[1] << 8)); }
-inline uint32_t load_le32(const uint8_t* in) {
-  return uint32_t(in[0]) | uint32_t(in[1]) << 8 | uint32_t(in[2]) << 16 | uint32_t(in[3]) << 24;
-}
-inline uint64_t load_le64(const uint8_t* in) {
-  uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v |= uint64_t(in[i]) << (8 * i);
-  return v;
-}
 // A ref of `width` bytes (1..4).
-inline uint32_t load_ref(const uint8_t* in, unsigned width) {
-  uint32_t v = 0;
-  for (unsigned i = 0; i < width; ++i) v |= uint32_t(in[i]) << (8 * i);
-  return v;
-}
+inline uint32_t load_ref(const uint8_t* in, unsigned width) { return uint32_t(bytes::load_le_width(in, width)); }
 inline unsigned ref_width_for(uint32_t max_ref) {
   return max_ref < (1u << 8) ? 1 : max_ref < (1u << 16) ? 2 : max_ref < (1u << 24) ? 3 : 4;
 }

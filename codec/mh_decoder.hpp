@@ -1,4 +1,4 @@
-// Decoder of MH / MMH tile payloads (format: client/mh_format.hpp, docs/mh.md): point lookups at
+// Decoder of MH / MMH tile payloads (format: codec/mh_format.hpp, docs/mh.md): point lookups at
 // full or coarser resolution, PCF over a kernel inside the tile, statistics for `inspect`.
 //
 // Untrusted input: parse() validates the whole payload up front (header, every reachable block
@@ -17,7 +17,7 @@
 #include <span>
 #include <vector>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

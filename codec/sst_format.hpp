@@ -1,5 +1,5 @@
 // SST (sparse shadow tree, DESIGN.md §8, seed 002) tile payload format, shared by the encoder
-// (builder/sst_encoder) and the decoder (client/sst_tile_view). FORMAT-DEFINING: changing anything
+// (builder/sst_encoder) and the decoder (codec/sst_tile_view). FORMAT-DEFINING: changing anything
 // here changes stored bytes; bump kFormatVersion. Full description: docs/sst.md.
 //
 // Layout (all integers little-endian, no alignment):

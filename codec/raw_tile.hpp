@@ -9,7 +9,7 @@
 #include <span>
 #include <vector>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

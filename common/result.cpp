@@ -1,4 +1,4 @@
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

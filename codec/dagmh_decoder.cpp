@@ -1,4 +1,4 @@
-#include "client/dagmh_decoder.hpp"
+#include "codec/dagmh_decoder.hpp"
 
 #include <algorithm>
 #include <array>
@@ -8,10 +8,11 @@
 #include <cstring>
 #include <string>
 
-#include "client/dagmh_format.hpp"
-#include "client/unaligned_load.hpp"
+#include "codec/dagmh_format.hpp"
+#include "common/byte_order.hpp"
 
 namespace shadowtiles {
+using namespace bytes;  // payload field loads (common/byte_order.hpp)
 namespace {
 
 namespace F = dagmh_format;

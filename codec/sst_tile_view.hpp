@@ -1,4 +1,4 @@
-// Reader of SST tile payloads (format: client/sst_format.hpp, docs/sst.md): point lookups by Morton
+// Reader of SST tile payloads (format: codec/sst_format.hpp, docs/sst.md): point lookups by Morton
 // order descent of a block's quadtree, PCF lit counts over a box, size statistics for `inspect`.
 //
 // Untrusted input: parse() validates the whole payload up front (header fields, exact section
@@ -16,7 +16,7 @@
 #include <cstdint>
 #include <span>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

@@ -1,4 +1,4 @@
-// Random-access view of a CPVS tile payload (client/cpvs_format.hpp): visibility at (u, v, depth
+// Random-access view of a CPVS tile payload (codec/cpvs_format.hpp): visibility at (u, v, depth
 // step), PCF counts via leaf masks and popcounts, and the first shadowed step of a column.
 // parse() checks every header field, every child code and every ref once (refs must land on a node
 // start of the next level or on a leaf), so lookups afterwards follow refs without checks.
@@ -11,8 +11,8 @@
 #include <span>
 #include <vector>
 
-#include "client/cpvs_format.hpp"
-#include "store/result.hpp"
+#include "codec/cpvs_format.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 
@@ -49,7 +49,7 @@ class CpvsTileView {
   };
   const uint8_t* child_node(unsigned level, const uint8_t* node, uint16_t codes, unsigned child) const;
   uint32_t leaf_ref(unsigned level, const uint8_t* node, uint16_t codes, unsigned child) const;
-  uint64_t leaf(uint32_t index) const { return cpvs::load_le64(leaves_ + 8 * size_t(index)); }
+  uint64_t leaf(uint32_t index) const { return bytes::load_le<uint64_t>(leaves_ + 8 * size_t(index)); }
   uint32_t count_in(unsigned level, const uint8_t* node, uint32_t side, uint32_t nu, uint32_t nv, uint32_t step,
                     const Box& box) const;
   uint32_t first_shadowed_in(unsigned level, const uint8_t* node, uint32_t side, uint32_t z0, uint32_t u,

@@ -1,8 +1,8 @@
-#include "client/cpvs_decoder.hpp"
+#include "codec/cpvs_decoder.hpp"
 
 #include <limits>
 
-#include "client/cpvs_tile_view.hpp"
+#include "codec/cpvs_tile_view.hpp"
 
 namespace shadowtiles {
 namespace {

@@ -1,10 +1,10 @@
-#include "client/decoded_tile.hpp"
+#include "codec/decoded_tile.hpp"
 
-#include "client/cpvs_decoder.hpp"
-#include "client/dagmh_decoder.hpp"
-#include "client/mh_decoder.hpp"
-#include "client/raw_tile.hpp"
-#include "client/sst_decoder.hpp"
+#include "codec/cpvs_decoder.hpp"
+#include "codec/dagmh_decoder.hpp"
+#include "codec/mh_decoder.hpp"
+#include "codec/raw_tile.hpp"
+#include "codec/sst_decoder.hpp"
 
 namespace shadowtiles {
 namespace {

@@ -5,7 +5,7 @@
 
 #include <cstdint>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

@@ -1,4 +1,4 @@
-#include "client/sst_tile_view.hpp"
+#include "codec/sst_tile_view.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -7,10 +7,11 @@
 #include <cstring>
 #include <string>
 
-#include "client/sst_format.hpp"
-#include "client/unaligned_load.hpp"
+#include "codec/sst_format.hpp"
+#include "common/byte_order.hpp"
 
 namespace shadowtiles {
+using namespace bytes;  // payload field loads (common/byte_order.hpp)
 namespace {
 
 namespace F = sst_format;

@@ -1,4 +1,4 @@
-#include "client/light_frame.hpp"
+#include "codec/light_frame.hpp"
 
 #include <algorithm>
 #include <cmath>

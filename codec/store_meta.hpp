@@ -11,10 +11,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "client/light_frame.hpp"
-#include "client/tile_layout.hpp"
+#include "codec/light_frame.hpp"
+#include "codec/tile_layout.hpp"
 #include "store/method.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

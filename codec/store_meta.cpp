@@ -1,4 +1,4 @@
-#include "client/store_meta.hpp"
+#include "codec/store_meta.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -2,14 +2,14 @@
 // visibility at (u, v, quantised depth) (lit), PCF by leaf-mask popcounts (lit_count), and as
 // value() the start depth of the column's first shadowed step (for reports only).
 // Errors: corrupt_data for a malformed payload, unsupported for another format version.
-// Safe on untrusted input (client/cpvs_tile_view.hpp validates everything at parse).
+// Safe on untrusted input (codec/cpvs_tile_view.hpp validates everything at parse).
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <span>
 
-#include "client/decoded_tile.hpp"
+#include "codec/decoded_tile.hpp"
 
 namespace shadowtiles {
 

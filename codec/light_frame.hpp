@@ -12,7 +12,7 @@
 #include <array>
 #include <cstdint>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

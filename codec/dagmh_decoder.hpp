@@ -1,4 +1,4 @@
-// Decoder of DAG-MH tile payloads (format: client/dagmh_format.hpp, docs/dagmh.md): point lookups at
+// Decoder of DAG-MH tile payloads (format: codec/dagmh_format.hpp, docs/dagmh.md): point lookups at
 // full or coarser resolution, PCF over a box inside the tile, size statistics for `inspect`.
 //
 // Traversal (DESIGN.md §7): two value indices, `count` (values before the current node in depth-first
@@ -21,7 +21,7 @@
 #include <span>
 #include <vector>
 
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

@@ -1,4 +1,4 @@
-#include "client/tile_layout.hpp"
+#include "codec/tile_layout.hpp"
 
 #include <bit>
 #include <string>

@@ -1,4 +1,4 @@
-#include "client/cpvs_tile_view.hpp"
+#include "codec/cpvs_tile_view.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -24,7 +24,7 @@ Result<CpvsTileView> CpvsTileView::parse(std::span<const uint8_t> payload) {
   const uint8_t* p = payload.data();
   if (payload.size() < cpvs::kHeaderBytes) return corrupt("shorter than its header");
   if (std::memcmp(p + cpvs::kOffMagic, cpvs::kMagic, 4) != 0) return corrupt("bad magic");
-  if (uint16_t version = cpvs::load_le16(p + cpvs::kOffVersion); version != cpvs::kFormatVersion)
+  if (uint16_t version = bytes::load_le<uint16_t>(p + cpvs::kOffVersion); version != cpvs::kFormatVersion)
     return make_error(ErrorCode::unsupported, "cpvs payload: format version " + std::to_string(version));
   CpvsTileView view;
   uint8_t layout = p[cpvs::kOffLayout];
@@ -32,14 +32,14 @@ Result<CpvsTileView> CpvsTileView::parse(std::span<const uint8_t> payload) {
   view.layout_ = cpvs::LeafLayout(layout);
   view.root_code_ = p[cpvs::kOffRootCode];
   if (view.root_code_ > cpvs::kCodeRef) return corrupt("bad root code");
-  view.tile_size_ = cpvs::load_le32(p + cpvs::kOffTileSize);
-  view.depth_steps_ = cpvs::load_le32(p + cpvs::kOffDepthSteps);
+  view.tile_size_ = bytes::load_le<uint32_t>(p + cpvs::kOffTileSize);
+  view.depth_steps_ = bytes::load_le<uint32_t>(p + cpvs::kOffDepthSteps);
   const uint32_t n = view.depth_steps_;
   if (!std::has_single_bit(n) || n < cpvs::kMinSide || n > cpvs::kMaxDepthSteps) return corrupt("bad depth steps");
   if (!std::has_single_bit(view.tile_size_) || view.tile_size_ > n) return corrupt("bad tile size");
-  view.level_count_ = cpvs::load_le32(p + cpvs::kOffLevelCount);
+  view.level_count_ = bytes::load_le<uint32_t>(p + cpvs::kOffLevelCount);
   if (view.level_count_ != cpvs::level_count_for(n)) return corrupt("level count does not match depth steps");
-  const uint64_t leaf_count = cpvs::load_le32(p + cpvs::kOffLeafCount);
+  const uint64_t leaf_count = bytes::load_le<uint32_t>(p + cpvs::kOffLeafCount);
 
   const unsigned levels = view.level_count_;
   uint64_t at = cpvs::kHeaderBytes + uint64_t(levels) * cpvs::kLevelEntryBytes;
@@ -48,7 +48,7 @@ Result<CpvsTileView> CpvsTileView::parse(std::span<const uint8_t> payload) {
   view.ref_width_.resize(levels);
   for (unsigned l = 0; l < levels; ++l) {
     const uint8_t* entry = p + cpvs::kHeaderBytes + l * cpvs::kLevelEntryBytes;
-    level_bytes[l] = cpvs::load_le32(entry);
+    level_bytes[l] = bytes::load_le<uint32_t>(entry);
     view.ref_width_[l] = entry[4];
     if (entry[4] < 1 || entry[4] > 4 || entry[5] || entry[6] || entry[7]) return corrupt("bad level table entry");
     view.level_begin_.push_back(p + at);
@@ -73,7 +73,7 @@ Result<CpvsTileView> CpvsTileView::parse(std::span<const uint8_t> payload) {
     for (uint64_t pos = 0; pos < bytes;) {
       if (bytes - pos < 2) return corrupt("truncated node");
       starts[pos] = true;
-      uint16_t codes = cpvs::load_le16(region + pos);
+      uint16_t codes = bytes::load_le<uint16_t>(region + pos);
       if (cpvs::has_invalid_code(codes)) return corrupt("invalid child code");
       const unsigned refs = cpvs::ref_count(codes);
       pos += 2;
@@ -90,7 +90,7 @@ Result<CpvsTileView> CpvsTileView::parse(std::span<const uint8_t> payload) {
   if (view.root_code_ == cpvs::kCodeRef) {
     // Level 0 holds exactly the root node, at offset 0.
     if (levels == 0 || level_bytes[0] < 2) return corrupt("missing root node");
-    const unsigned root_refs = cpvs::ref_count(cpvs::load_le16(view.level_begin_[0]));
+    const unsigned root_refs = cpvs::ref_count(bytes::load_le<uint16_t>(view.level_begin_[0]));
     if (level_bytes[0] != 2 + uint64_t(root_refs) * view.ref_width_[0])
       return corrupt("root level holds more than the root");
   }
@@ -116,7 +116,7 @@ bool CpvsTileView::lit_at_step(uint32_t u, uint32_t v, uint32_t step) const {
   uint32_t half = depth_steps_ / 2;
   for (unsigned level = 0;; ++level, half /= 2) {
     const bool last = level + 1 == level_count_;
-    const uint16_t codes = cpvs::load_le16(node);
+    const uint16_t codes = bytes::load_le<uint16_t>(node);
     const unsigned child = last && layout_ == cpvs::LeafLayout::slab8
                                ? (step & 7u)
                                : unsigned((u & half) != 0) | unsigned((v & half) != 0) << 1 |
@@ -149,7 +149,7 @@ uint32_t CpvsTileView::lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t
 uint32_t CpvsTileView::count_in(unsigned level, const uint8_t* node, uint32_t side, uint32_t nu, uint32_t nv,
                                 uint32_t step, const Box& box) const {
   const bool last = level + 1 == level_count_;
-  const uint16_t codes = cpvs::load_le16(node);
+  const uint16_t codes = bytes::load_le<uint16_t>(node);
   if (last && layout_ == cpvs::LeafLayout::slab8) {
     // The node's 8x8 texels at one step: one slice child.
     const unsigned child = step & 7u;
@@ -192,7 +192,7 @@ uint32_t CpvsTileView::first_shadowed_step(uint32_t u, uint32_t v) const {
 uint32_t CpvsTileView::first_shadowed_in(unsigned level, const uint8_t* node, uint32_t side, uint32_t z0, uint32_t u,
                                          uint32_t v) const {
   const bool last = level + 1 == level_count_;
-  const uint16_t codes = cpvs::load_le16(node);
+  const uint16_t codes = bytes::load_le<uint16_t>(node);
   if (last && layout_ == cpvs::LeafLayout::slab8) {
     const unsigned bit = (u & 7u) | (v & 7u) << 3;
     for (unsigned child = 0; child < 8; ++child) {

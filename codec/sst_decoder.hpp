@@ -1,12 +1,12 @@
 // SST decoder (DESIGN.md §8, seed 002): a tile's sparse shadow tree forest of plane-fit quadtrees
-// (client/sst_format.hpp) as a DecodedTile: owns the payload, reads it through SstTileView.
+// (codec/sst_format.hpp) as a DecodedTile: owns the payload, reads it through SstTileView.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <span>
 
-#include "client/decoded_tile.hpp"
+#include "codec/decoded_tile.hpp"
 
 namespace shadowtiles {
 

@@ -1,11 +1,11 @@
-#include "client/sst_decoder.hpp"
+#include "codec/sst_decoder.hpp"
 
 #include <string>
 #include <vector>
 
-#include "client/sst_format.hpp"
+#include "codec/sst_format.hpp"
 
-#include "client/sst_tile_view.hpp"
+#include "codec/sst_tile_view.hpp"
 
 namespace shadowtiles {
 namespace {

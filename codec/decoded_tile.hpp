@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "store/method.hpp"
-#include "store/result.hpp"
+#include "common/result.hpp"
 
 namespace shadowtiles {
 

@@ -1,5 +1,5 @@
 // DAG-MH tile payload format, shared by the encoder (builder/dagmh_encoder) and the decoder
-// (client/dagmh_decoder). FORMAT-DEFINING: changing anything here changes stored bytes; bump
+// (codec/dagmh_decoder). FORMAT-DEFINING: changing anything here changes stored bytes; bump
 // kFormatVersion and keep golden payloads of released versions in tests. Full description:
 // docs/dagmh.md.
 //

@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# The layering check passes on the tree and fails on a copy with a planted bad include (codec -> client).
+set -euo pipefail
+src="$1"
+bash "$src/scripts/check_layering.sh" "$src"
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+for d in common store codec client builder server bench cli; do [ -d "$src/$d" ] && cp -r "$src/$d" "$tmp/"; done
+echo '#include "client/shadow_map.hpp"' >> "$tmp/codec/decoded_tile.cpp"
+if out=$(bash "$src/scripts/check_layering.sh" "$tmp" 2>&1); then
+  echo "FAIL: the planted include codec -> client was not caught"; exit 1
+fi
+grep -q 'codec/decoded_tile.cpp (codec) includes client/' <<<"$out" || { echo "FAIL: wrong message: $out"; exit 1; }
+echo "planted include caught: $out"
