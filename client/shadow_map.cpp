@@ -50,18 +50,57 @@ Result<std::unique_ptr<ShadowMap>> ShadowMap::open(std::shared_ptr<const TileSou
   return map;
 }
 
+ShadowMap::ShadowMap(std::shared_ptr<const TileSource> source, StoreMeta meta, LightFrame frame, TileLayout layout,
+                     Options options)
+    : source_(std::move(source)),
+      local_(std::dynamic_pointer_cast<const LmdbTileSource>(source_)),
+      meta_(std::move(meta)),
+      frame_(frame),
+      layout_(layout),
+      options_(options),
+      tile_shift_(layout.levels_in_tile()),
+      id_(next_id()) {
+  for (store::Method m : meta_.methods) method_present_[uint8_t(m)] = true;
+}
+
 namespace {
 
-// The last tile each thread looked up, by map id (ids are never reused, so a destroyed map's entry
-// never matches a new map at the same address). Hits here are counted locally and added to the
-// shared stats at the next locked lookup.
-struct LastTile {
+// Per-thread pins (see the header): direct-mapped by tile, valid for one map id and one eviction
+// epoch of that map. Only the owning thread reads or writes its table.
+constexpr size_t kPinSlots = 64;
+struct alignas(64) TilePins {
+  struct Pin {
+    uint64_t key = 0;  // packed method/x/y; 0 = unused (method bytes start at 1)
+    const DecodedTile* tile = nullptr;
+    std::shared_ptr<const DecodedTile> hold;
+  };
   uint64_t map_id = 0;
-  store::TileKey key{};
-  std::shared_ptr<const DecodedTile> tile;
-  uint64_t unreported_hits = 0;
+  uint64_t epoch = 0;
+  uint64_t unreported_hits = 0;  // added to the shared stats at the next locked lookup
+  std::array<Pin, kPinSlots> pins;
+  ~TilePins();
 };
-thread_local LastTile t_last_tile;
+// The raw pointer is what the hot path reads (trivial thread_local: no init guard); the owner
+// frees the table at thread exit.
+thread_local TilePins* t_pins = nullptr;
+thread_local std::unique_ptr<TilePins> t_pins_owner;
+TilePins::~TilePins() { t_pins = nullptr; }
+
+TilePins& thread_pins() {
+  if (!t_pins) {
+    t_pins_owner = std::make_unique<TilePins>();
+    t_pins = t_pins_owner.get();
+  }
+  return *t_pins;
+}
+
+inline uint64_t pin_key(store::Method method, uint32_t x, uint32_t y) {
+  return (uint64_t(uint8_t(method)) << 56) | (uint64_t(x & 0xfffffff) << 28) | (y & 0xfffffff);
+}
+// 8 x 8 neighbouring tiles of one method never collide; methods are spread apart.
+inline size_t pin_slot(store::Method method, uint32_t x, uint32_t y) {
+  return ((x & 7u) | ((y & 7u) << 3)) ^ ((uint32_t(uint8_t(method)) * 21u) & 63u);
+}
 
 }  // namespace
 
@@ -70,70 +109,139 @@ uint64_t ShadowMap::next_id() {
   return next.fetch_add(1, std::memory_order_relaxed);
 }
 
-Result<std::shared_ptr<const DecodedTile>> ShadowMap::tile(store::Method method, TileCoord coord) const {
-  if (!meta_.has_method(method))
-    return make_error(ErrorCode::unsupported,
-                      std::string("method '") + store::method_name(method) + "' is not in this store");
-  if (!layout_.contains(coord)) return make_error(ErrorCode::invalid_input, "tile outside the map");
-  store::TileKey key{method, layout_.tile_level(), coord.x, coord.y};
-  LastTile& last = t_last_tile;
-  if (last.map_id == id_ && last.key == key) {
-    ++last.unreported_hits;
-    return last.tile;
+Status ShadowMap::check_method(store::Method method) const {
+  if (method_present_[uint8_t(method)]) return {};
+  return make_error(ErrorCode::unsupported,
+                    std::string("method '") + store::method_name(method) + "' is not in this store");
+}
+
+inline bool ShadowMap::pinned_tile(store::Method method, uint32_t x, uint32_t y, const DecodedTile** tile,
+                                   Error* error) const {
+  TilePins* pins = t_pins;
+  if (pins && pins->map_id == id_ && pins->epoch == epoch_.load(std::memory_order_relaxed)) {
+    const TilePins::Pin& pin = pins->pins[pin_slot(method, x, y)];
+    if (pin.key == pin_key(method, x, y)) {
+      ++pins->unreported_hits;
+      *tile = pin.tile;
+      return true;
+    }
   }
-  auto remember = [&](std::shared_ptr<const DecodedTile> tile) {
-    last.map_id = id_;
-    last.key = key;
-    last.tile = tile;
-    return tile;
-  };
-  {
-    std::lock_guard lock(cache_mutex_);
-    if (last.map_id == id_) stats_.hits += last.unreported_hits;
-    last.unreported_hits = 0;
+  return pin_slow(method, x, y, tile, error);
+}
+
+bool ShadowMap::pin_slow(store::Method method, uint32_t x, uint32_t y, const DecodedTile** tile,
+                         Error* error) const {
+  TilePins& pins = thread_pins();
+  // Pins of another map or of an older epoch are dropped here, outside any lock.
+  uint64_t hits = pins.unreported_hits;
+  pins.unreported_hits = 0;
+  const uint64_t epoch = epoch_.load(std::memory_order_acquire);
+  if (pins.map_id != id_ || pins.epoch != epoch) {
+    if (pins.map_id != id_) hits = 0;  // another map's hits
+    for (TilePins::Pin& pin : pins.pins) pin = TilePins::Pin{};
+    pins.map_id = id_;
+    pins.epoch = epoch;
+  }
+  auto shared = shared_tile(store::TileKey{method, layout_.tile_level(), x, y}, hits);
+  if (!shared) {
+    *error = shared.error();
+    return false;
+  }
+  TilePins::Pin& pin = pins.pins[pin_slot(method, x, y)];
+  pin.key = pin_key(method, x, y);
+  pin.tile = shared->get();
+  pin.hold = std::move(*shared);
+  *tile = pin.tile;
+  return true;
+}
+
+Result<std::shared_ptr<const DecodedTile>> ShadowMap::shared_tile(const store::TileKey& key,
+                                                                  uint64_t reported_hits) const {
+  std::unique_lock lock(cache_mutex_);
+  stats_.hits += reported_hits;
+  bool waited = false;
+  for (;;) {
     if (auto it = cache_.find(key); it != cache_.end()) {
       lru_.splice(lru_.begin(), lru_, it->second.lru);
-      ++stats_.hits;
-      return remember(it->second.tile);
+      if (!waited) ++stats_.hits;
+      return it->second.tile;
     }
-    ++stats_.misses;
+    auto flight = in_flight_.find(key);
+    if (flight == in_flight_.end()) break;
+    // Another thread is fetching this tile: wait for its result rather than fetch it again.
+    std::shared_ptr<InFlight> pending = flight->second;
+    if (!waited) ++stats_.shared_misses;
+    waited = true;
+    fetched_.wait(lock, [&] { return pending->done; });
+    if (pending->error) return *pending->error;
+    // Loop: normally cached now (unless already evicted again, then this thread fetches it).
   }
-  auto blob = source_->tile_blob(key);
-  if (!blob) return blob.error();
-  std::shared_ptr<const DecodedTile> decoded;
-  if (blob->has_value()) {
-    store::BlobHeader header;
-    auto payload = store::decode_blob(**blob, &header);
-    if (!payload)
-      return make_error(payload.error().code, "tile " + std::string(store::method_name(method)) + "/" +
-                                                  std::to_string(coord.x) + "/" + std::to_string(coord.y) + ": " +
-                                                  payload.error().message);
-    if (header.method != method)
-      return make_error(ErrorCode::corrupt_data, "tile blob holds another method than its key");
-    auto tile = decode_tile(method, *payload);
-    if (!tile) return tile.error();
-    if ((*tile)->size() != layout_.tile_size())
-      return make_error(ErrorCode::corrupt_data, "tile size differs from the store's");
-    decoded = std::move(*tile);
+  ++stats_.misses;
+  auto pending = std::make_shared<InFlight>();
+  in_flight_[key] = pending;
+  lock.unlock();
+  auto decoded = fetch_tile(key);
+  std::vector<std::shared_ptr<const DecodedTile>> evicted;  // freed after the lock is released
+  lock.lock();
+  in_flight_.erase(key);
+  pending->done = true;
+  if (!decoded) {
+    pending->error = decoded.error();  // a failed tile is not cached: the next lookup fetches again
+    lock.unlock();
+    fetched_.notify_all();
+    return decoded.error();
   }
-  std::lock_guard lock(cache_mutex_);
-  if (auto it = cache_.find(key); it != cache_.end()) return remember(it->second.tile);  // raced: keep the first
-  size_t bytes = decoded ? decoded->memory_bytes() : 0;
+  const size_t bytes = *decoded ? (*decoded)->memory_bytes() : 0;
   lru_.push_front(key);
-  cache_[key] = CacheEntry{decoded, bytes, lru_.begin()};
+  cache_[key] = CacheEntry{*decoded, bytes, lru_.begin()};
   stats_.bytes += bytes;
+  stats_.peak_bytes = std::max(stats_.peak_bytes, stats_.bytes);
   while (stats_.bytes > options_.cache_bytes && lru_.size() > 1) {
     auto victim = cache_.find(lru_.back());
     stats_.bytes -= victim->second.bytes;
+    evicted.push_back(std::move(victim->second.tile));
     cache_.erase(victim);
     lru_.pop_back();
+    ++stats_.evictions;
   }
-  return remember(decoded);
+  if (!evicted.empty()) epoch_.fetch_add(1, std::memory_order_release);
+  lock.unlock();
+  fetched_.notify_all();
+  return decoded;
+}
+
+Result<std::shared_ptr<const DecodedTile>> ShadowMap::fetch_tile(const store::TileKey& key) const {
+  const store::Method method = key.method;
+  auto blob = source_->tile_blob(key);
+  if (!blob) return blob.error();
+  if (!blob->has_value()) return std::shared_ptr<const DecodedTile>();  // empty tile
+  store::BlobHeader header;
+  auto payload = store::decode_blob(**blob, &header);
+  if (!payload)
+    return make_error(payload.error().code, "tile " + std::string(store::method_name(method)) + "/" +
+                                                std::to_string(key.x) + "/" + std::to_string(key.y) + ": " +
+                                                payload.error().message);
+  if (header.method != method) return make_error(ErrorCode::corrupt_data, "tile blob holds another method than its key");
+  auto tile = decode_tile(method, *payload);
+  if (!tile) return tile.error();
+  if ((*tile)->size() != layout_.tile_size())
+    return make_error(ErrorCode::corrupt_data, "tile size differs from the store's");
+  return tile;
+}
+
+Result<std::shared_ptr<const DecodedTile>> ShadowMap::tile(store::Method method, TileCoord coord) const {
+  if (Status s = check_method(method); !s) return s.error();
+  if (!layout_.contains(coord)) return make_error(ErrorCode::invalid_input, "tile outside the map");
+  return shared_tile(store::TileKey{method, layout_.tile_level(), coord.x, coord.y}, 0);
 }
 
 Status ShadowMap::prefetch(store::Method method, std::span<const TileCoord> tiles) const {
-  for (TileCoord coord : tiles)
-    if (auto decoded = tile(method, coord); !decoded) return decoded.error();
+  if (Status s = check_method(method); !s) return s;
+  for (TileCoord coord : tiles) {
+    if (!layout_.contains(coord)) return make_error(ErrorCode::invalid_input, "tile outside the map");
+    auto decoded = shared_tile(store::TileKey{method, layout_.tile_level(), coord.x, coord.y}, 0);
+    if (!decoded) return decoded.error();
+  }
   return {};
 }
 
@@ -145,11 +253,15 @@ std::optional<TileCoord> ShadowMap::tile_of(const Vec3& world) const {
 }
 
 Result<float> ShadowMap::texel_value(store::Method method, uint32_t u, uint32_t v, unsigned max_level) const {
-  const uint32_t size = layout_.tile_size();
-  auto decoded = tile(method, {u / size, v / size});
-  if (!decoded) return decoded.error();
-  if (!*decoded) return std::numeric_limits<float>::infinity();
-  return (*decoded)->value(u % size, v % size, max_level);
+  if (Status s = check_method(method); !s) return s.error();
+  if (u >= layout_.resolution() || v >= layout_.resolution())
+    return make_error(ErrorCode::invalid_input, "texel outside the map");
+  const DecodedTile* decoded;
+  Error error;
+  if (!pinned_tile(method, u >> tile_shift_, v >> tile_shift_, &decoded, &error)) return error;
+  if (!decoded) return std::numeric_limits<float>::infinity();
+  const uint32_t mask = layout_.tile_size() - 1;
+  return decoded->value(u & mask, v & mask, max_level);
 }
 
 unsigned ShadowMap::level_count() const { return unsigned(std::countr_zero(layout_.resolution())) + 1; }
@@ -202,22 +314,10 @@ Result<std::pair<ShadowAnswer, unsigned>> ShadowMap::locate(const Vec3& world, d
   return std::pair{answer, *max_level};
 }
 
-Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, unsigned kernel,
-                                    std::optional<double> bias, std::optional<unsigned> level,
-                                    ShadowAnswer* answer_out) const {
-  if (kernel == 0 || kernel % 2 == 0 || kernel > kMaxPcfKernel)
-    return make_error(ErrorCode::invalid_input,
-                      "pcf kernel must be odd and in [1, " + std::to_string(kMaxPcfKernel) + "]");
-  double bias_world = bias.value_or(meta_.default_bias);
-  auto located = locate(world, bias_world, level);
-  if (!located) return located.error();
-  auto [answer, max_level] = *located;
-  if (answer.outside_map) {
-    if (answer_out) *answer_out = answer;
-    return 1.0;
-  }
-  const int64_t cu = int64_t(answer.light.u), cv = int64_t(answer.light.v), half = kernel / 2;
-  const float threshold = biased_depth(answer.light.depth, bias_world);
+Result<uint64_t> ShadowMap::pcf_lit_samples(store::Method method, int64_t cu, int64_t cv, unsigned kernel,
+                                            float threshold, unsigned max_level,
+                                            std::optional<unsigned> level) const {
+  const int64_t half = kernel / 2;
   const int64_t size = layout_.tile_size();
   const int64_t side = int64_t(layout_.resolution());
   // The kernel box, clipped to the map (samples outside are lit), split into its parts per tile.
@@ -225,74 +325,99 @@ Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, uns
   const int64_t cu_lo = std::max<int64_t>(u_lo, 0), cu_hi = std::min<int64_t>(u_hi, side - 1);
   const int64_t cv_lo = std::max<int64_t>(v_lo, 0), cv_hi = std::min<int64_t>(v_hi, side - 1);
   uint64_t lit = uint64_t(kernel) * kernel - uint64_t(cu_hi - cu_lo + 1) * uint64_t(cv_hi - cv_lo + 1);
-  for (int64_t ty = cv_lo / size; ty <= cv_hi / size; ++ty) {
-    for (int64_t tx = cu_lo / size; tx <= cu_hi / size; ++tx) {
-      auto decoded = tile(method, {uint32_t(tx), uint32_t(ty)});
-      if (!decoded) return decoded.error();
-      int64_t bu0 = std::max(cu_lo, tx * size), bu1 = std::min(cu_hi, tx * size + size - 1);
-      int64_t bv0 = std::max(cv_lo, ty * size), bv1 = std::min(cv_hi, ty * size + size - 1);
-      uint32_t kw = uint32_t(bu1 - bu0 + 1), kh = uint32_t(bv1 - bv0 + 1);
-      if (!*decoded) {
+  const unsigned shift = tile_shift_;
+  for (int64_t ty = cv_lo >> shift; ty <= cv_hi >> shift; ++ty) {
+    for (int64_t tx = cu_lo >> shift; tx <= cu_hi >> shift; ++tx) {
+      const DecodedTile* t;
+      Error error;
+      if (!pinned_tile(method, uint32_t(tx), uint32_t(ty), &t, &error)) return error;
+      const int64_t bu0 = std::max(cu_lo, tx * size), bu1 = std::min(cu_hi, tx * size + size - 1);
+      const int64_t bv0 = std::max(cv_lo, ty * size), bv1 = std::min(cv_hi, ty * size + size - 1);
+      const uint32_t kw = uint32_t(bu1 - bu0 + 1), kh = uint32_t(bv1 - bv0 + 1);
+      if (!t) {
         lit += uint64_t(kw) * kh;  // empty tile: lit
         continue;
       }
-      const DecodedTile& t = **decoded;
-      uint32_t lu = uint32_t(bu0 - tx * size), lv = uint32_t(bv0 - ty * size);
+      const uint32_t lu = uint32_t(bu0 - tx * size), lv = uint32_t(bv0 - ty * size);
       if (max_level == 255) {
-        lit += t.lit_count(lu, lv, kw, kh, threshold);
+        lit += t->lit_count(lu, lv, kw, kh, threshold);
       } else {
         for (uint32_t v = lv; v < lv + kh; ++v)
           for (uint32_t u = lu; u < lu + kw; ++u) {
             auto coarse = top_value(method, uint32_t(tx * size + u), uint32_t(ty * size + v), *level);
-            lit += coarse ? threshold <= *coarse : t.lit(u, v, threshold, max_level);
+            lit += coarse ? threshold <= *coarse : t->lit(u, v, threshold, max_level);
           }
       }
     }
   }
-  {
-    // The centre texel's value, for the answer's record.
-    auto centre = tile(method, {uint32_t(cu / size), uint32_t(cv / size)});
-    if (!centre) return centre.error();
-    answer.empty_tile = !*centre;
-    answer.value = *centre ? (*centre)->value(uint32_t(cu % size), uint32_t(cv % size), max_level)
-                           : std::numeric_limits<float>::infinity();
+  return lit;
+}
+
+Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, unsigned kernel,
+                                    std::optional<double> bias, std::optional<unsigned> level,
+                                    ShadowAnswer* answer_out) const {
+  if (kernel == 0 || kernel % 2 == 0 || kernel > kMaxPcfKernel)
+    return make_error(ErrorCode::invalid_input,
+                      "pcf kernel must be odd and in [1, " + std::to_string(kMaxPcfKernel) + "]");
+  if (Status s = check_method(method); !s) return s.error();
+  const double bias_world = bias.value_or(meta_.default_bias);
+  auto located = locate(world, bias_world, level);
+  if (!located) return located.error();
+  auto [answer, max_level] = *located;
+  if (answer.outside_map) {
+    if (answer_out) *answer_out = answer;
+    return 1.0;
   }
-  double fraction = double(lit) / double(kernel * kernel);
-  answer.lit = fraction > 0.5;
-  if (answer_out) *answer_out = answer;
+  const int64_t cu = int64_t(answer.light.u), cv = int64_t(answer.light.v);
+  const float threshold = biased_depth(answer.light.depth, bias_world);
+  auto lit = pcf_lit_samples(method, cu, cv, kernel, threshold, max_level, level);
+  if (!lit) return lit.error();
+  const double fraction = double(*lit) / double(kernel * kernel);
+  if (answer_out) {
+    // The centre texel's value, for the answer's record (a second descent: only when asked for).
+    const DecodedTile* centre;
+    Error error;
+    if (!pinned_tile(method, uint32_t(cu) >> tile_shift_, uint32_t(cv) >> tile_shift_, &centre, &error)) return error;
+    const uint32_t mask = layout_.tile_size() - 1;
+    answer.empty_tile = !centre;
+    answer.value = centre ? centre->value(uint32_t(cu) & mask, uint32_t(cv) & mask, max_level)
+                          : std::numeric_limits<float>::infinity();
+    answer.lit = fraction > 0.5;
+    *answer_out = answer;
+  }
   return fraction;
 }
 
 Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, std::optional<double> bias,
                                       std::optional<unsigned> level) const {
-  double bias_world = bias.value_or(meta_.default_bias);
+  if (Status s = check_method(method); !s) return s.error();
+  const double bias_world = bias.value_or(meta_.default_bias);
   auto located = locate(world, bias_world, level);
   if (!located) return located.error();
   auto [answer, max_level] = *located;
   if (answer.outside_map) return answer;
-  uint32_t u = uint32_t(answer.light.u), v = uint32_t(answer.light.v);
-  const uint32_t size = layout_.tile_size();
+  const uint32_t u = uint32_t(answer.light.u), v = uint32_t(answer.light.v);
+  // Same comparison as query_pcf, so a 1x1 kernel equals a point query exactly.
+  const float threshold = biased_depth(answer.light.depth, bias_world);
   if (level) {
-    if (!meta_.has_method(method))
-      return make_error(ErrorCode::unsupported,
-                        std::string("method '") + store::method_name(method) + "' is not in this store");
     if (auto coarse = top_value(method, u, v, *level)) {
       answer.value = *coarse;
-      answer.lit = biased_depth(answer.light.depth, bias_world) <= answer.value;
+      answer.lit = threshold <= answer.value;
       return answer;
     }
   }
-  auto decoded = tile(method, {u / size, v / size});
-  if (!decoded) return decoded.error();
-  if (!*decoded) {
+  const DecodedTile* decoded;
+  Error error;
+  if (!pinned_tile(method, u >> tile_shift_, v >> tile_shift_, &decoded, &error)) return error;
+  if (!decoded) {
     answer.empty_tile = true;
     answer.value = std::numeric_limits<float>::infinity();
     return answer;
   }
-  answer.value = (*decoded)->value(u % size, v % size, max_level);
-  // Same comparison as query_pcf, so a 1x1 kernel equals a point query exactly.
-  const float threshold = biased_depth(answer.light.depth, bias_world);
-  answer.lit = (*decoded)->lit(u % size, v % size, threshold, max_level);
+  const uint32_t mask = layout_.tile_size() - 1;
+  const DecodedTile::Sample sample = decoded->sample(u & mask, v & mask, threshold, max_level);
+  answer.value = sample.value;
+  answer.lit = sample.lit;
   return answer;
 }
 

@@ -5,12 +5,19 @@
 // checksum, method) and decoded on demand and kept in an LRU cache bounded in bytes. A tile that
 // fails its checks is an error, never an answer.
 // Points outside the map are lit and flagged; absent tiles of a complete build are empty (lit).
-// Thread safety: all methods may be called concurrently (the cache is locked; decoding runs
-// outside the lock). Each thread also remembers the last tile it used, so runs of lookups in one
-// tile (coherent queries, PCF kernels) take no lock; that tile stays alive while the thread holds it,
-// so the cache may exceed its budget by one tile per querying thread.
+// Thread safety: all methods may be called concurrently. Lookups scale with threads: a lookup's
+// hot path writes nothing shared (no reference count, atomic or lock). Eviction safety is by
+// per-thread pins: each thread keeps shared_ptr pins to the tiles it used last (up to kPinSlots,
+// direct-mapped), reads them by raw pointer, and re-pins through the locked shared cache on a miss.
+// The cache evicts only its own reference; an evicted tile lives on until every thread that pinned
+// it notices the cache's eviction epoch changed (at its next lookup) and drops its pins, or exits.
+// So the cache may exceed its budget by the tiles pinned by threads between an eviction and their
+// next lookup. Concurrent misses on one tile fetch and decode it once (the others wait for it).
 #pragma once
 
+#include <array>
+#include <atomic>
+#include <condition_variable>
 #include <cstdint>
 #include <filesystem>
 #include <list>
@@ -40,8 +47,11 @@ struct ShadowAnswer {
 
 struct CacheStats {
   uint64_t hits = 0;
-  uint64_t misses = 0;
+  uint64_t misses = 0;         // fetches (blob read + decode)
+  uint64_t shared_misses = 0;  // misses that waited for another thread's fetch of the same tile
   uint64_t bytes = 0;
+  uint64_t peak_bytes = 0;     // largest `bytes` so far
+  uint64_t evictions = 0;
   uint64_t tiles = 0;
 };
 
@@ -72,7 +82,8 @@ class ShadowMap {
 
   // Value at global texel (u, v) < resolution. Errors: unsupported method, corrupt tile, I/O.
   Result<float> texel_value(store::Method method, uint32_t u, uint32_t v, unsigned max_level = 255) const;
-  // Decoded tile, nullptr for an empty tile. Errors as texel_value.
+  // Decoded tile, nullptr for an empty tile. Errors as texel_value. Returns a reference the caller
+  // owns (one reference-count update); the query paths read per-thread pins instead.
   Result<std::shared_ptr<const DecodedTile>> tile(store::Method method, TileCoord tile) const;
   // Loads `tiles` into the cache (ahead of queries, e.g. the tiles under a camera). Stops at the
   // first error. Tiles beyond the cache's budget evict earlier ones, as any lookup would.
@@ -86,7 +97,8 @@ class ShadowMap {
                              std::optional<unsigned> level = {}) const;
   // Percentage-closer filtering: the lit fraction of the k x k texels centred on the point's texel
   // (k odd, 1..kMaxPcfKernel), each compared with the point's depth. Kernels crossing tile borders
-  // read the neighbour tiles; samples outside the map are lit. `answer.lit` is fraction > 0.5.
+  // read the neighbour tiles; samples outside the map are lit. `answer.lit` is fraction > 0.5;
+  // `answer.value` is the centre texel's value (descended only when `answer` is given).
   static constexpr unsigned kMaxPcfKernel = 63;
   Result<double> query_pcf(const Vec3& world, store::Method method, unsigned kernel, std::optional<double> bias = {},
                            std::optional<unsigned> level = {}, ShadowAnswer* answer = nullptr) const;
@@ -97,16 +109,10 @@ class ShadowMap {
 
  private:
   ShadowMap(std::shared_ptr<const TileSource> source, StoreMeta meta, LightFrame frame, TileLayout layout,
-            Options options)
-      : source_(std::move(source)),
-        local_(std::dynamic_pointer_cast<const LmdbTileSource>(source_)),
-        meta_(std::move(meta)),
-        frame_(frame),
-        layout_(layout),
-        options_(options),
-        id_(next_id()) {}
+            Options options);
   static uint64_t next_id();
 
+  Status check_method(store::Method method) const;
   // Validates a query and maps the point to light space; the answer is flagged outside_map (lit)
   // when it falls off the map. Also returns the max level inside a tile tree for `level`.
   Result<std::pair<ShadowAnswer, unsigned>> locate(const Vec3& world, double bias_world,
@@ -121,6 +127,20 @@ class ShadowMap {
   // method's top tree; nullopt when the method has none (flat methods: the tile's value is used).
   std::optional<float> top_value(store::Method method, uint32_t u, uint32_t v, unsigned level) const;
 
+  // The tile of a query (method already checked, coordinates inside the map): the calling thread's
+  // pin when it holds one (no shared write), else pinned through the shared cache. Sets *tile
+  // (nullptr: empty tile) and returns true, or sets *error and returns false.
+  bool pinned_tile(store::Method method, uint32_t x, uint32_t y, const DecodedTile** tile, Error* error) const;
+  bool pin_slow(store::Method method, uint32_t x, uint32_t y, const DecodedTile** tile, Error* error) const;
+  // Through the shared cache: a cached tile, another thread's fetch in flight, or a fetch now.
+  Result<std::shared_ptr<const DecodedTile>> shared_tile(const store::TileKey& key, uint64_t reported_hits) const;
+  // Reads, checks and decodes one tile blob (no lock held).
+  Result<std::shared_ptr<const DecodedTile>> fetch_tile(const store::TileKey& key) const;
+
+  // Per-query PCF over a kernel, the tiles it crosses included (method checked, point on the map).
+  Result<uint64_t> pcf_lit_samples(store::Method method, int64_t cu, int64_t cv, unsigned kernel, float threshold,
+                                   unsigned max_level, std::optional<unsigned> level) const;
+
   std::shared_ptr<const TileSource> source_;
   std::shared_ptr<const LmdbTileSource> local_;  // source_ when it is a local store
   std::map<store::Method, std::shared_ptr<const DecodedTile>> top_trees_;  // loaded at open
@@ -128,17 +148,28 @@ class ShadowMap {
   LightFrame frame_;
   TileLayout layout_;
   Options options_;
+  std::array<bool, 256> method_present_{};  // by method byte: one check per call, no search
+  unsigned tile_shift_ = 0;                 // log2(tile size)
 
+  // Bumped (under cache_mutex_) whenever the cache evicts: threads then drop their pins. Read on
+  // every lookup, written rarely: on a cache line of its own so the lock's writes do not share it.
+  alignas(64) mutable std::atomic<uint64_t> epoch_{0};
   struct CacheEntry {
     std::shared_ptr<const DecodedTile> tile;  // nullptr: empty tile
     size_t bytes = 0;
     std::list<store::TileKey>::iterator lru;
   };
-  mutable std::mutex cache_mutex_;
+  struct InFlight {
+    bool done = false;
+    std::optional<Error> error;
+  };
+  alignas(64) mutable std::mutex cache_mutex_;
+  mutable std::condition_variable fetched_;  // an in-flight fetch finished
   mutable std::map<store::TileKey, CacheEntry> cache_;
+  mutable std::map<store::TileKey, std::shared_ptr<InFlight>> in_flight_;
   mutable std::list<store::TileKey> lru_;  // front = most recent
   mutable CacheStats stats_;
-  const uint64_t id_;  // tells this map's entries in the per-thread last-tile memory from another's
+  const uint64_t id_;  // tells this map's entries in the per-thread pins from another's
 };
 
 }  // namespace shadowtiles

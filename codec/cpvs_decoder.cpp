@@ -25,6 +25,10 @@ class CpvsDecodedTile final : public DecodedTile {
     return float(double(step) / double(view_.depth_steps()));
   }
   bool lit(uint32_t u, uint32_t v, float threshold, unsigned) const override { return view_.lit(u, v, threshold); }
+  // Visibility is not a comparison with value() here: both are looked up.
+  Sample sample(uint32_t u, uint32_t v, float threshold, unsigned max_level) const override {
+    return {value(u, v, max_level), lit(u, v, threshold, max_level)};
+  }
   uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const override {
     return view_.lit_count(u0, v0, kw, kh, threshold);
   }

@@ -442,6 +442,44 @@ float DagMhTileView::lookup(uint32_t u, uint32_t v, unsigned max_level) const {
   return value_at(resolve(start_state(u, v, stop), u, v, stop));
 }
 
+void DagMhTileView::lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const {
+  if (size_ == 0) {
+    for (size_t i = 0; i < queries.size(); ++i) lit[i] = queries[i].threshold <= 1.0f;
+    return;
+  }
+  const unsigned L = levels_;
+  const unsigned stop = std::min(max_level, L);
+  const uint32_t mask = size_ - 1;
+  State path[F::kMaxLevels + 1];
+  unsigned base = 0, end = 0;  // path[base..end] holds the previous query's walk
+  uint32_t pu = 0, pv = 0, cached_index = UINT32_MAX;
+  float cached_value = 0;
+  for (size_t i = 0; i < queries.size(); ++i) {
+    const uint32_t u = queries[i].u & mask, v = queries[i].v & mask;
+    const unsigned shared = L - unsigned(std::bit_width((u ^ pu) | (v ^ pv)));
+    State c;
+    if (i > 0 && shared >= base) {
+      c = path[std::min(shared, end)];
+    } else {
+      // A skip-list entry answers for its whole cell only (its walk may have ended above the
+      // cell's level toward the cell's corner), so later queries reuse it inside that cell.
+      c = start_state(u, v, stop);
+      base = skip_level_ != 0 && stop >= skip_level_ ? skip_level_ : 0;
+      path[c.level] = c;
+    }
+    while (c.kind == kDag && c.level < stop) {
+      step(c, u, v);
+      if (c.kind != kDone) path[c.level] = c;
+    }
+    end = c.level;
+    const uint32_t index = c.kind == kTreelet ? treelet_find(c, u, v, stop) : c.last;
+    if (index != cached_index) cached_index = index, cached_value = value_at(index);
+    lit[i] = queries[i].threshold <= cached_value;
+    pu = u;
+    pv = v;
+  }
+}
+
 uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth,
                                       float bias) const {
   assert(kw >= 1 && kh >= 1 && u0 < size_ && v0 < size_ && kw <= size_ - u0 && kh <= size_ - v0);

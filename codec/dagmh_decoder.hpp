@@ -21,6 +21,7 @@
 #include <span>
 #include <vector>
 
+#include "codec/texel_query.hpp"
 #include "common/result.hpp"
 
 namespace shadowtiles {
@@ -74,6 +75,10 @@ class DagMhTileView {
   // to the box's lowest common ancestor, then per sample from there. Equals per-sample lookup().
   // Preconditions: box inside the tile (asserted; clamped in release).
   uint32_t pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth, float bias) const;
+
+  // Batch: lit[i] = threshold_i <= lookup(u_i, v_i, max_level); Morton-sorted queries share their
+  // descents (each resumes from the deepest node shared with the previous one) and value reads.
+  void lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const;
 
   // Value number `index` of the depth-first list (< stats().values; masked otherwise).
   float value_at(uint32_t index) const;

@@ -15,6 +15,9 @@ class RawDecodedTile final : public DecodedTile {
   uint32_t size() const override { return view_.size(); }
   float value(uint32_t u, uint32_t v, unsigned) const override { return view_.value(u, v); }
   size_t memory_bytes() const override { return view_.memory_bytes(); }
+  void lit_sorted(std::span<const TexelQuery> queries, unsigned, uint8_t* lit) const override {
+    for (size_t i = 0; i < queries.size(); ++i) lit[i] = queries[i].threshold <= view_.value(queries[i].u, queries[i].v);
+  }
 
  private:
   RawTileView view_;
@@ -37,6 +40,9 @@ class MhDecodedTile final : public DecodedTile {
   size_t memory_bytes() const override { return payload_.size() + sizeof(*this) + view_.stats().skip_list_bytes; }
   uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const override {
     return view_.pcf_lit_count(u0, v0, kw, kh, threshold, 0.0f);
+  }
+  void lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const override {
+    view_.lit_sorted(queries, max_level == 255 ? kMhAllLevels : max_level, lit);
   }
   // SBE16a-style parts: header (root value included), embedded skip list, one record (mask +
   // block offset) per stored node with children, one float per stored valued node but the root.
@@ -84,6 +90,9 @@ class DagMhDecodedTile final : public DecodedTile {
   size_t memory_bytes() const override { return payload_.size() + sizeof(*this) + view_.derived_bytes(); }
   uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const override {
     return view_.pcf_lit_count(u0, v0, kw, kh, threshold, 0.0f);
+  }
+  void lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const override {
+    view_.lit_sorted(queries, max_level == 255 ? kDagMhAllLevels : max_level, lit);
   }
   // SE21 Tables 3 and 4: topology (DAG nodes, treelets) against values (chunk parts).
   std::vector<SizePart> size_breakdown() const override {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "codec/texel_query.hpp"
 #include "store/method.hpp"
 #include "common/result.hpp"
 
@@ -31,6 +32,23 @@ class DecodedTile {
   // it, because one value per texel cannot describe them.
   virtual bool lit(uint32_t u, uint32_t v, float threshold, unsigned max_level = 255) const {
     return threshold <= value(u, v, max_level);
+  }
+  // Value and lit() of one texel together: one descent for depth-map methods (a point query needs
+  // both). Methods whose lit() is not a comparison with value() override it.
+  struct Sample {
+    float value;
+    bool lit;
+  };
+  virtual Sample sample(uint32_t u, uint32_t v, float threshold, unsigned max_level = 255) const {
+    const float x = value(u, v, max_level);
+    return {x, threshold <= x};
+  }
+  // Batch point lookups: lit[i] = lit(q.u, q.v, q.threshold, max_level) for each query, the queries
+  // sorted along the Morton curve inside the tile (any order is answered correctly; sorted ones
+  // share their descents). Hierarchical methods resume each descent from the deepest node the
+  // query shares with the previous one.
+  virtual void lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const {
+    for (size_t i = 0; i < queries.size(); ++i) lit[i] = this->lit(queries[i].u, queries[i].v, queries[i].threshold, max_level);
   }
   // The payload's size split into named parts (e.g. DAG nodes, treelets, chunk headers), for
   // `inspect`; empty when the method has no breakdown.

@@ -344,6 +344,49 @@ uint32_t MhTileView::pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32
   }
 }
 
+template <unsigned W>
+void MhTileView::lit_sorted_impl(std::span<const TexelQuery> queries, unsigned stop, uint8_t* lit) const {
+  const unsigned L = levels_;
+  const uint32_t mask = size_ - 1;
+  WalkState path[F::kMaxLevels + 1];
+  unsigned base = 0, end = 0;  // path[base..end] holds the previous query's walk
+  uint32_t pu = 0, pv = 0;
+  for (size_t i = 0; i < queries.size(); ++i) {
+    const uint32_t u = queries[i].u & mask, v = queries[i].v & mask;
+    const unsigned shared = L - unsigned(std::bit_width((u ^ pu) | (v ^ pv)));
+    unsigned from;
+    WalkState c;
+    if (i > 0 && shared >= base) {
+      from = std::min(shared, end);
+      c = path[from];
+    } else {
+      c = start_state(u, v, stop, &from);
+      base = from;
+      path[from] = c;
+    }
+    while (c.mask != 0 && from < stop) {
+      if (!step<W>(stream_, child_index(u, v, L - 1 - from), c)) break;
+      path[++from] = c;
+    }
+    end = from;
+    lit[i] = queries[i].threshold <= c.value;
+    pu = u;
+    pv = v;
+  }
+}
+
+void MhTileView::lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const {
+  const unsigned stop = std::min(max_level, levels_);
+  switch (offset_width_) {
+    case 1: return lit_sorted_impl<1>(queries, stop, lit);
+    case 2: return lit_sorted_impl<2>(queries, stop, lit);
+    case 3: return lit_sorted_impl<3>(queries, stop, lit);
+    case 4: return lit_sorted_impl<4>(queries, stop, lit);
+    default:  // default-constructed view: root value only
+      for (size_t i = 0; i < queries.size(); ++i) lit[i] = queries[i].threshold <= root_value_;
+  }
+}
+
 float MhTileView::pcf_lit_fraction(uint32_t u0, uint32_t v0, uint32_t k, float depth, float bias) const {
   if (k == 0) return 0.0f;
   return float(pcf_lit_count(u0, v0, k, k, depth, bias)) / float(uint64_t(k) * k);

@@ -17,6 +17,7 @@
 #include <span>
 #include <vector>
 
+#include "codec/texel_query.hpp"
 #include "common/result.hpp"
 
 namespace shadowtiles {
@@ -78,6 +79,11 @@ class MhTileView {
   // kernel across tiles.
   uint32_t pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth, float bias) const;
 
+  // Batch: lit[i] = threshold_i <= lookup(u_i, v_i, max_level). Queries sorted along the Morton
+  // curve share their descents: each resumes from the deepest node shared with the previous one.
+  // Preconditions as lookup().
+  void lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const;
+
  private:
   struct WalkState {
     float value;
@@ -86,6 +92,8 @@ class MhTileView {
   };
   template <unsigned W>
   uint32_t pcf_count_impl(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth, float bias) const;
+  template <unsigned W>
+  void lit_sorted_impl(std::span<const TexelQuery> queries, unsigned stop, uint8_t* lit) const;
   WalkState start_state(uint32_t u, uint32_t v, unsigned max_level, unsigned* level) const;
 
   const uint8_t* stream_ = nullptr;
