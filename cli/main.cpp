@@ -1,9 +1,11 @@
 // shadowtiles: one CLI for the whole product (build, query, inspect, ...). Exit codes: cli/exit_codes.hpp.
 #include <memory>
+#include <string>
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "builder/builder_version.hpp"
 #include "cli/commands.hpp"
 #include "cli/exit_codes.hpp"
 
@@ -15,6 +17,9 @@ int main(int argc, char** argv) {
   sinks.push_back(std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
   CLI::App app{"shadowtiles: lossless compressed shadow maps of huge static worlds"};
   app.require_subcommand(1);
+  // The package version (CMake's project version), then the builder version stamped into stores.
+  app.set_version_flag("--version", std::string("shadowtiles ") + SHADOWTILES_VERSION + " (" +
+                                        shadowtiles::builder_version() + ")");
   app.fallthrough();  // -v/-q work after the command name too
   bool verbose = false, quiet = false;
   app.add_flag("-v,--verbose", verbose, "Debug logging");
