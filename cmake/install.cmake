@@ -24,7 +24,19 @@ write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/shadowtilesConfigVe
 install(FILES ${CMAKE_CURRENT_BINARY_DIR}/shadowtilesConfig.cmake ${CMAKE_CURRENT_BINARY_DIR}/shadowtilesConfigVersion.cmake
         DESTINATION ${SHADOWTILES_CMAKE_DIR} COMPONENT development)
 
+file(RELATIVE_PATH SHADOWTILES_PC_TO_PREFIX /prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig /prefix)
 foreach(pc shadowtiles shadowtiles-client)
   configure_file(${CMAKE_CURRENT_LIST_DIR}/${pc}.pc.in ${CMAKE_CURRENT_BINARY_DIR}/${pc}.pc @ONLY)
   install(FILES ${CMAKE_CURRENT_BINARY_DIR}/${pc}.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig COMPONENT development)
 endforeach()
+
+# The Python module (ctypes over libshadowtiles.so.1; docs/python.md) under
+# PREFIX/lib/python3/dist-packages (Debian's layout; PYTHONPATH for other prefixes). It finds the
+# library through _install_paths.py, a path relative to itself, so the prefix may move.
+set(SHADOWTILES_PYTHON_DIR lib/python3/dist-packages CACHE STRING "Install folder of the Python module, under the prefix")
+file(RELATIVE_PATH SHADOWTILES_PYTHON_TO_LIB /prefix/${SHADOWTILES_PYTHON_DIR}/shadowtiles
+     /prefix/${CMAKE_INSTALL_LIBDIR}/libshadowtiles.so.${SHADOWTILES_C_SOVERSION})
+file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/python/_install_paths.py
+     "# Written by cmake --install: the C library relative to this package.\nLIBRARY_RELATIVE = \"${SHADOWTILES_PYTHON_TO_LIB}\"\n")
+install(FILES ${PROJECT_SOURCE_DIR}/python/shadowtiles/__init__.py ${CMAKE_CURRENT_BINARY_DIR}/python/_install_paths.py
+        DESTINATION ${SHADOWTILES_PYTHON_DIR}/shadowtiles COMPONENT python)

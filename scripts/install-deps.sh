@@ -11,7 +11,9 @@ packages=(
   libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libcpp-httplib-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libpng-dev               # PNG frames of `shadowtiles render`
-  python3-matplotlib       # charts of the benchmark report (bench/make_report.py)
+  python3-matplotlib       # charts of the benchmark report (bench/make_report.py), examples/python
+  python3-numpy            # the Python module (python/shadowtiles, ctypes over the C API) and examples
+  dpkg-dev file            # cpack -G DEB: dpkg-shlibdeps and ELF detection (tests/install/package_test.sh)
   wrk curl                 # HTTP load benchmark (bench/server_load.sh)
 )
 # --list: print the package names (one place defines them; .ci/run installs from it).

@@ -1,0 +1,56 @@
+#!/usr/bin/python3
+"""Python overhead: Map.query on N points (one batch through the C API, one thread) vs the same
+points answered by the C++ client in a loop (cpp-consumer --bench), in one run, best of REPEATS.
+
+    bench_query.py STORE CPP_CONSUMER [--points 1000000] [--method mh] [--repeats 3]
+
+Points: uniform over the terrain's receivers (receivers.py needs an overhead store) or, by default,
+uniform in the scene bounds. Prints seconds and the ratio python / C++.
+"""
+import argparse
+import os
+import subprocess
+import tempfile
+import time
+
+import numpy as np
+
+import shadowtiles
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("store")
+    parser.add_argument("cpp_consumer")
+    parser.add_argument("--points", type=int, default=1_000_000)
+    parser.add_argument("--method", default="mh")
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+
+    with shadowtiles.open(args.store) as m:
+        lo = np.array(m.meta["scene"]["bounds_min"])
+        hi = np.array(m.meta["scene"]["bounds_max"])
+        points = np.random.default_rng(7).uniform(lo, hi, size=(args.points, 3))
+        m.query(points[:1000], args.method)  # open the tiles once, as the C++ pass does below
+        python_s = []
+        for _ in range(args.repeats):
+            start = time.perf_counter()
+            lit, _ = m.query(points, args.method, threads=1)
+            python_s.append(time.perf_counter() - start)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "points.f64")
+        points.tofile(path)
+        cpp_s = []
+        for _ in range(args.repeats):
+            out = subprocess.run([args.cpp_consumer, "--bench", args.store, path, args.method], check=True,
+                                 capture_output=True, text=True).stdout.split()
+            cpp_s.append(float(out[1]))
+            if int(out[5]) != int(lit.sum()):
+                raise SystemExit("C++ and Python disagree: %s vs %d lit" % (out[5], lit.sum()))
+    ratio = min(python_s) / min(cpp_s)
+    print("points %d method %s: python %.3f s, C++ %.3f s, ratio %.2f (best of %d)"
+          % (args.points, args.method, min(python_s), min(cpp_s), ratio, args.repeats))
+
+
+if __name__ == "__main__":
+    main()
