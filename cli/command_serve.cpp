@@ -1,4 +1,4 @@
-// `shadowtiles serve STORE`: the HTTP shadow service (server/server.hpp; API and config keys in
+// `shadowtiles serve [STORE]` (or the config's "store" key): the HTTP shadow service (server/server.hpp; API and config keys in
 // config/README.md). Config: defaults, then --config FILE, then the flags given on the command line.
 // SIGTERM / SIGINT stop accepting, drain in-flight requests and exit 0. SIGHUP (and a poll every
 // reload_poll_s) swaps to a new build at the store path (server/server.hpp, "Swapping builds").
@@ -35,6 +35,11 @@ int run(const ServeFlags& flags) {
     }
     config = *loaded;
   }
+  if (!flags.store.empty()) config.store = flags.store;
+  if (config.store.empty() && !flags.print_config) {
+    spdlog::error("serve: give the STORE directory (argument, or the config's \"store\" key)");
+    return kInvalidInput;
+  }
   if (!flags.host.empty()) config.host = flags.host;
   if (flags.port) config.port = *flags.port;
   if (flags.threads) config.threads = *flags.threads;
@@ -70,7 +75,7 @@ int run(const ServeFlags& flags) {
     return exit_code_for(bound.error());
   }
   server::Server& server = **bound;
-  if (Status s = server.attach_store(flags.store); !s) {
+  if (Status s = server.attach_store(config.store); !s) {
     // A build still being written (or incomplete) is served once done, if the path is polled.
     if (s.error().code != ErrorCode::invalid_input || config.reload_poll_s == 0) {
       spdlog::error("cannot open store: {}", s.error().message);
@@ -86,7 +91,7 @@ int run(const ServeFlags& flags) {
   // The bound port is printed on stdout too, so scripts using --port 0 can read it.
   std::printf("listening on http://%s:%d\n", config.host.c_str(), server.port());
   std::fflush(stdout);
-  spdlog::info("serving {} on http://{}:{} with {} threads", flags.store, config.host, server.port(), config.threads);
+  spdlog::info("serving {} on http://{}:{} with {} threads", config.store, config.host, server.port(), config.threads);
   Status served = server.run();
   {
     std::lock_guard lock(running_mutex);
@@ -105,20 +110,13 @@ int run(const ServeFlags& flags) {
 void add_serve_command(CLI::App& app, int& exit_code) {
   auto flags = std::make_shared<ServeFlags>();
   CLI::App* cmd = app.add_subcommand("serve", "HTTP shadow service: point, batch and PCF queries, tile blobs");
-  cmd->add_option("store", flags->store, "Store directory");
+  cmd->add_option("store", flags->store, "Store directory (default: the config's \"store\" key)");
   cmd->add_option("--config,-c", flags->config_file, "JSON config file (keys: config/README.md)");
   cmd->add_option("--host", flags->host, "Address to bind (default 127.0.0.1)");
   cmd->add_option("--port", flags->port, "Port (0: ephemeral, printed at start; default 8080)");
   cmd->add_option("--threads", flags->threads, "Worker threads (default 2)");
   cmd->add_flag("--print-config", flags->print_config, "Print the effective config as JSON and exit");
-  cmd->callback([flags, &exit_code] {
-    if (flags->store.empty() && !flags->print_config) {
-      spdlog::error("serve: give the STORE directory");
-      exit_code = kInvalidInput;
-      return;
-    }
-    exit_code = run(*flags);
-  });
+  cmd->callback([flags, &exit_code] { exit_code = run(*flags); });
 }
 
 }  // namespace shadowtiles::cli

@@ -52,7 +52,8 @@ Status ServerConfig::validate() const {
 }
 
 nlohmann::json ServerConfig::to_json() const {
-  return {{"host", host},
+  return {{"store", store},
+          {"host", host},
           {"port", port},
           {"threads", threads},
           {"cache_bytes", cache_bytes},
@@ -75,6 +76,12 @@ Result<ServerConfig> ServerConfig::from_json(const nlohmann::json& json, ServerC
   constexpr uint64_t kU64 = std::numeric_limits<uint64_t>::max();
   using Reader = std::function<Status(const nlohmann::json&, const std::string&)>;
   const std::map<std::string, Reader> readers = {
+      {"store",
+       [&](const nlohmann::json& v, const std::string& k) -> Status {
+         if (!v.is_string()) return bad(k, "expected a string (the store directory)");
+         config.store = v.get<std::string>();
+         return {};
+       }},
       {"host",
        [&](const nlohmann::json& v, const std::string& k) -> Status {
          if (!v.is_string()) return bad(k, "expected a string");

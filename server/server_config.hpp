@@ -21,6 +21,7 @@
 namespace shadowtiles::server {
 
 struct ServerConfig {
+  std::string store;               // store directory to serve; the positional STORE argument overrides it
   std::string host = "127.0.0.1";  // loopback unless told otherwise
   int port = 8080;                 // 0: an ephemeral port (Server::port() tells which)
   unsigned threads = 2;            // HTTP workers, also the batch split width

@@ -869,6 +869,39 @@ TEST(ServeCommand, ConfigFlagsAndSigtermDrain) {
   EXPECT_NE(rest.find("stopped on signal"), std::string::npos) << rest;
 }
 
+// The config's "store" key names the store, so a service unit passes only --config; without it
+// (and without the argument) serve refuses to start.
+TEST(ServeCommand, StoreKeyOfTheConfig) {
+  TempDir dir;
+  auto store_dir = dir.path() / "s";
+  ASSERT_TRUE(run_build(bunny_config(store_dir, {store::Method::raw})).ok());
+  const std::string cli = testing::cli_path().string();
+  std::ofstream(dir.path() / "none.json") << R"({"port": 0})";
+  std::string output;
+  EXPECT_EQ(testing::run_command(cli + " serve --config " + (dir.path() / "none.json").string(), &output), 2);
+  EXPECT_NE(output.find("\"store\" key"), std::string::npos) << output;
+
+  std::ofstream(dir.path() / "unit.json") << json{{"store", store_dir.string()}, {"port", 0}}.dump();
+  std::string command = "sh -c 'echo pid $$; exec " + cli + " serve --config " + (dir.path() / "unit.json").string() +
+                        "' 2>&1";
+  FILE* child = ::popen(command.c_str(), "r");
+  ASSERT_NE(child, nullptr);
+  int pid = -1;
+  ASSERT_EQ(std::fscanf(child, "pid %d\n", &pid), 1);
+  int port = read_port(child);
+  ASSERT_GT(port, 0);
+  auto health = httplib::Client("127.0.0.1", port).Get("/healthz");
+  ::kill(pid, SIGTERM);
+  ASSERT_TRUE(health);
+  EXPECT_EQ(health->status, 200);
+  std::string rest;
+  char buffer[512];
+  while (std::fgets(buffer, sizeof buffer, child)) rest += buffer;
+  int status = ::pclose(child);
+  ASSERT_TRUE(WIFEXITED(status)) << rest;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << rest;
+}
+
 
 // Swapping builds (DESIGN.md §9): the server follows the store path (a symlink repointed
 // atomically), publishes the new build without a restart, keeps builders out of the directory it
