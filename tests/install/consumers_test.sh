@@ -3,7 +3,7 @@
 # installs the build into a temporary prefix, checks the shared libraries' dependencies (no Embree,
 # no assimp) and soname, builds and runs the three consumers of examples/ against that prefix, and
 # requires their answers on 10,000 terrain receivers to equal `shadowtiles query --json` for mh,
-# mmh and dagmh. Then runs the Python terrain example (PNG) and checks Python errors carry the
+# mmh and dagmh, from the store and (C, Python) from `shadowtiles serve` on loopback. Then runs the Python terrain example (PNG) and checks Python errors carry the
 # library's message.   Usage: consumers_test.sh SOURCE_DIR BUILD_DIR
 set -euo pipefail
 src=$1 build=$2
@@ -54,6 +54,20 @@ for method in mh mmh dagmh; do
   "$py" "$src/tests/install/compare_answers.py" "$tmp/cli_$method.json" c="$tmp/c_$method.txt" \
     cpp="$tmp/cpp_$method.txt" python="$tmp/py_$method.txt"
 done
+
+echo "== from a server URL (the C API streams tiles over HTTP)"
+"$cli" -q serve "$tmp/sun" --port 0 >"$tmp/serve.out" 2>"$tmp/serve.err" &
+serve_pid=$!
+trap 'kill $serve_pid 2>/dev/null; wait $serve_pid 2>/dev/null; rm -rf "$tmp"' EXIT
+for _ in $(seq 100); do grep -q "listening on" "$tmp/serve.out" && break; sleep 0.1; done
+url=$(sed -n 's/^listening on //p' "$tmp/serve.out")
+[ -n "$url" ] || { echo "FAIL: the server did not start"; cat "$tmp/serve.err"; exit 1; }
+"$tmp/c/c-consumer" "$url" "$tmp/points.txt" mh >"$tmp/c_url_mh.txt" 2>/dev/null
+"$py" "$src/examples/python/query_points.py" "$url" "$tmp/points.txt" dagmh >"$tmp/py_url_dagmh.txt"
+kill $serve_pid; wait $serve_pid || true
+trap 'rm -rf "$tmp"' EXIT
+"$py" "$src/tests/install/compare_answers.py" "$tmp/cli_mh.json" c_url="$tmp/c_url_mh.txt"
+"$py" "$src/tests/install/compare_answers.py" "$tmp/cli_dagmh.json" python_url="$tmp/py_url_dagmh.txt"
 
 echo "== python example and errors"
 "$py" "$src/examples/python/terrain_shadow.py" "$tmp/sun" "$tmp/top" "$tmp/terrain.png" >"$tmp/summary.json"
