@@ -26,6 +26,8 @@ grep -q '^ExecStart=/usr/bin/shadowtiles serve --config /etc/shadowtiles/%i.json
 getent passwd shadowtiles >/dev/null
 [ -d /etc/shadowtiles ]
 ldconfig -p | grep 'libshadowtiles.so.1 ' >/dev/null
+# The Python module finds the packaged library by itself (Debian's interpreter, no PYTHONPATH).
+(cd / && env -u PYTHONPATH /usr/bin/python3 -c 'import shadowtiles; print("python module: libshadowtiles", shadowtiles.library_version())')
 if command -v systemd-analyze >/dev/null; then systemd-analyze verify "$unit" 2>&1 | grep -v 'shadowtiles-serve@' || true; fi
 
 DEBIAN_FRONTEND=noninteractive apt-get purge -y -qq shadowtiles >/dev/null
