@@ -95,6 +95,27 @@ with shadowtiles.open(tmp + "/sun") as m:
         raise SystemExit("a NaN point did not raise")
     except shadowtiles.Error as e:
         assert "finite" in str(e), str(e)
+    # The GIL is released during a batch: another Python thread runs while the call is in C. With a
+    # long switch interval a thread holding the GIL keeps it for the whole call (PyDLL: 0 ticks).
+    import threading
+    sys.setswitchinterval(1.0)
+    ticks, stop, started = [0], threading.Event(), threading.Event()
+    def tick():
+        started.set()
+        while not stop.is_set():
+            ticks[0] += 1
+    many = np.repeat(np.random.default_rng(3).uniform(m.meta["scene"]["bounds_min"], m.meta["scene"]["bounds_max"],
+                                                      size=(1000, 3)), 2000, axis=0)
+    ticker = threading.Thread(target=tick)
+    ticker.start()
+    started.wait()
+    before = ticks[0]
+    m.query(many, "dagmh", threads=1)
+    during = ticks[0] - before
+    stop.set()
+    ticker.join()
+    sys.setswitchinterval(0.005)
+    assert during > 0, "no Python thread ran during a 2M-point query: the GIL was held"
     t = m.tile("mh", 1, 1)
     assert t.shape == (m.tile_size, m.tile_size) and t.dtype == np.float32
 print("python example: %.1f%% of the terrain in shadow; errors carry the library's messages"
