@@ -6,6 +6,7 @@
 // Usage: bench_api STORE [METHODS=raw,mh,mmh,dagmh] [RECEIVERS=1000000] [SECONDS=0.5] [MODES=all]
 //   MODES: comma list of point,pcf3,batch (default all)
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -87,6 +88,31 @@ int run(int argc, char** argv) {
         }
         std::printf("%-6s %-6s %-7s %10.2f M %10.2f M %8.2f\n", name.c_str(), kernel == 1 ? "point" : "pcf3", order,
                     rate[0] / 1e6, rate[1] / 1e6, rate[0] > 0 ? rate[1] / rate[0] : 0.0);
+        std::fflush(stdout);
+      }
+    }
+    if (has_mode("batch")) {
+      for (unsigned kernel : {1u, 3u}) {
+        double rate[2] = {0, 0};
+        for (unsigned threads : {1u, 2u}) {
+          ShadowMap::BatchOptions batch;
+          batch.kernel = kernel;
+          batch.threads = threads;
+          ShadowMap::BatchAnswers answers;
+          double best = 0;
+          for (int repeat = 0; repeat < 5; ++repeat) {
+            const auto start = std::chrono::steady_clock::now();
+            if (Status s = m.query_batch(random, *method, batch, answers); !s) {
+              std::fprintf(stderr, "%s\n", s.error().message.c_str());
+              return 1;
+            }
+            const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            best = std::max(best, double(random.size()) / dt);
+          }
+          rate[threads - 1] = best;
+        }
+        std::printf("%-6s %-6s %-7s %10.2f M %10.2f M %8.2f\n", name.c_str(), kernel == 1 ? "batch" : "batch3",
+                    "random", rate[0] / 1e6, rate[1] / 1e6, rate[0] > 0 ? rate[1] / rate[0] : 0.0);
         std::fflush(stdout);
       }
     }

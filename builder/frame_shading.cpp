@@ -48,33 +48,17 @@ Result<std::vector<float>> visibility_from_map(const ShadowMap& map, store::Meth
                                                const FrameHits& frame, unsigned threads) {
   const std::vector<float> facing = sun_facing(frame, map.frame().direction());
   std::vector<float> visibility(frame.pixels.size(), 0.0f);
-  std::atomic<bool> failed{false};
-  std::mutex error_mutex;
-  std::optional<Error> first_error;
-  over_rows(threads, [&](uint32_t first_row, uint32_t step) {
-    for (uint32_t y = first_row; y < frame.height && !failed; y += step) {
-      for (uint32_t x = 0; x < frame.width; ++x) {
-        const size_t i = size_t(y) * frame.width + x;
-        if (facing[i] <= 0) continue;
-        const Vec3& p = frame.pixels[i].position;
-        std::optional<Error> error;
-        if (pcf_kernel <= 1) {
-          auto answer = map.query(p, method);
-          if (answer) visibility[i] = answer->lit ? 1.0f : 0.0f; else error = answer.error();
-        } else {
-          auto fraction = map.query_pcf(p, method, pcf_kernel);
-          if (fraction) visibility[i] = float(*fraction); else error = fraction.error();
-        }
-        if (error) {
-          std::lock_guard lock(error_mutex);
-          if (!first_error) first_error = *error;
-          failed = true;
-          return;
-        }
-      }
-    }
-  });
-  if (first_error) return *first_error;
+  // One batch of the sunward pixels: sorted by tile and Morton order, shared descents, both cores.
+  std::vector<Vec3> points;
+  std::vector<uint32_t> pixel;
+  for (size_t i = 0; i < frame.pixels.size(); ++i)
+    if (facing[i] > 0) points.push_back(frame.pixels[i].position), pixel.push_back(uint32_t(i));
+  ShadowMap::BatchOptions options;
+  options.kernel = std::max(1u, pcf_kernel);
+  options.threads = std::max(1u, threads);
+  ShadowMap::BatchAnswers answers;
+  if (Status s = map.query_batch(points, method, options, answers); !s) return s.error();
+  for (size_t j = 0; j < points.size(); ++j) visibility[pixel[j]] = answers.lit[j];
   return visibility;
 }
 

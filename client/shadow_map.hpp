@@ -20,11 +20,13 @@
 #include <condition_variable>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <list>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <vector>
 
 #include <span>
 
@@ -102,6 +104,28 @@ class ShadowMap {
   static constexpr unsigned kMaxPcfKernel = 63;
   Result<double> query_pcf(const Vec3& world, store::Method method, unsigned kernel, std::optional<double> bias = {},
                            std::optional<unsigned> level = {}, ShadowAnswer* answer = nullptr) const;
+  // Batch queries, the way a game server or a simulation asks: out.lit[i] answers points[i] exactly
+  // as query() (1 lit, 0 shadowed) or query_pcf() (the lit fraction) would; out.outside lists the
+  // points off the map (lit), ascending. Points are sorted by tile and along the Morton curve inside
+  // it, each tile is looked up once per run of its points, runs walk down a shared path (each point
+  // resumes from the deepest node it shares with the previous one), and the work is split across
+  // `threads`. Errors: those of query() / query_pcf() (the first one fails the whole batch).
+  struct BatchOptions {
+    unsigned kernel = 1;  // 1: point query; odd k: PCF k x k
+    std::optional<double> bias;
+    std::optional<unsigned> level;
+    unsigned threads = 0;  // workers when no parallel_for is given; 0 = hardware threads
+    // Runs fn(begin, end) over disjoint ranges covering [0, count) and returns when all are done
+    // (e.g. a server's pool); empty: `threads` std::threads started for the call.
+    std::function<void(size_t count, const std::function<void(size_t, size_t)>& fn)> parallel_for;
+  };
+  struct BatchAnswers {
+    std::vector<float> lit;
+    std::vector<uint32_t> outside;
+  };
+  Status query_batch(std::span<const Vec3> points, store::Method method, const BatchOptions& options,
+                     BatchAnswers& out) const;
+
   // Levels of the whole map: log2(resolution) + 1.
   unsigned level_count() const;
 

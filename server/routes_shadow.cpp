@@ -3,6 +3,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 
 #include <spdlog/spdlog.h>
 
@@ -90,9 +91,13 @@ void post_binary(ServiceState& state, const ShadowMap& map, const httplib::Reque
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
   state.metrics.add_points(points->size());
   std::string body(result->lit.size() * 4, '\0');
-  for (size_t i = 0; i < result->lit.size(); ++i) {
-    uint32_t bits = std::bit_cast<uint32_t>(result->lit[i]);
-    for (int b = 0; b < 4; ++b) body[i * 4 + b] = char((bits >> (8 * b)) & 0xff);  // little-endian on the wire
+  if constexpr (std::endian::native == std::endian::little) {
+    std::memcpy(body.data(), result->lit.data(), body.size());  // the wire order already
+  } else {
+    for (size_t i = 0; i < result->lit.size(); ++i) {
+      uint32_t bits = std::bit_cast<uint32_t>(result->lit[i]);
+      for (int b = 0; b < 4; ++b) body[i * 4 + b] = char((bits >> (8 * b)) & 0xff);  // little-endian on the wire
+    }
   }
   res.status = 200;
   res.set_header("X-Shadow-Outside-Map", std::to_string(result->outside.size()));

@@ -4,12 +4,6 @@
 #include <mutex>
 
 namespace shadowtiles::server {
-namespace {
-// Below this many points per share, splitting costs more than it saves (a point query is ~0.1 µs
-// to a few µs once tiles are cached).
-constexpr size_t kMinPointsPerShare = 2048;
-}  // namespace
-
 Result<ResolvedQuery> resolve_query(const ShadowMap& map, const QueryOptions& options) {
   ResolvedQuery query;
   query.method = options.method.value_or(map.default_method());
@@ -42,26 +36,20 @@ Result<PointResult> answer_point(const ShadowMap& map, const Vec3& point, const 
 
 Result<BatchResult> answer_batch(const ShadowMap& map, std::span<const Vec3> points, const ResolvedQuery& query,
                                  BatchPool& pool) {
+  // ShadowMap::query_batch sorts the points by tile and Morton order and walks shared paths; the
+  // pool's threads run its parallel phases (no threads started per request).
+  ShadowMap::BatchOptions options;
+  options.kernel = query.pcf == 0 ? 1 : query.pcf;
+  options.bias = query.bias;
+  options.level = query.level;
+  options.parallel_for = [&pool](size_t count, const std::function<void(size_t, size_t)>& fn) {
+    pool.parallel_for(count, 1, fn);
+  };
+  ShadowMap::BatchAnswers answers;
+  if (Status s = map.query_batch(points, query.method, options, answers); !s) return s.error();
   BatchResult result;
-  result.lit.assign(points.size(), 1.0f);
-  std::vector<uint8_t> outside(points.size(), 0);
-  std::mutex error_mutex;
-  std::optional<Error> first_error;
-  pool.parallel_for(points.size(), kMinPointsPerShare, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) {
-      auto answer = answer_point(map, points[i], query);
-      if (!answer) {
-        std::lock_guard lock(error_mutex);
-        if (!first_error) first_error = answer.error();
-        return;  // one error fails the batch: stop this share early
-      }
-      result.lit[i] = float(answer->lit);
-      outside[i] = answer->answer.outside_map;
-    }
-  });
-  if (first_error) return *first_error;
-  for (size_t i = 0; i < points.size(); ++i)
-    if (outside[i]) result.outside.push_back(uint32_t(i));
+  result.lit = std::move(answers.lit);
+  result.outside = std::move(answers.outside);
   return result;
 }
 

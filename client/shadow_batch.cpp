@@ -1,0 +1,237 @@
+// ShadowMap::query_batch (declared in client/shadow_map.hpp). Three parallel phases:
+//   A. per chunk of points: light-space transform, Morton key of the texel, biased depth, and a
+//      histogram of the keys' top bits (buckets; points off the map go to an extra last bucket);
+//   B. per chunk: stable scatter into the buckets (one counting-sort pass over the whole batch);
+//   C. workers claim buckets: sort the bucket's low key bits in cache (LSD radix), then walk its runs
+//      of points per tile: the tile is looked up once per run, point queries go to the decoder's
+//      shared-path walk (lit_sorted), PCF kernels inside the tile to lit_count, kernels crossing a
+//      tile or the map's edge and coarse levels to the per-point path.
+// Every answer is computed by the same expressions as query() / query_pcf(), so they are equal.
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+#include <thread>
+
+#include "client/morton.hpp"
+#include "client/shadow_map.hpp"
+
+namespace shadowtiles {
+namespace {
+
+struct BatchItem {
+  uint64_t key;  // Morton code of the texel; kOffMap for points off the map
+  uint32_t index;
+  float threshold;  // biased depth
+};
+constexpr uint64_t kOffMap = ~uint64_t(0);
+constexpr unsigned kBucketBits = 12;
+constexpr size_t kPointsPerChunk = 8192;
+constexpr size_t kQueryBlock = 256;  // point queries handed to a decoder at once
+
+// Sorts items[0, n) by key's low `bits` bits (the high bits are equal), `scratch` of n items.
+void sort_low_bits(BatchItem* items, BatchItem* scratch, size_t n, unsigned bits) {
+  if (n < 2 || bits == 0) return;
+  if (n <= 48) {  // insertion sort: cheaper than counting passes for a handful
+    for (size_t i = 1; i < n; ++i) {
+      BatchItem x = items[i];
+      size_t j = i;
+      for (; j > 0 && items[j - 1].key > x.key; --j) items[j] = items[j - 1];
+      items[j] = x;
+    }
+    return;
+  }
+  BatchItem* from = items;
+  BatchItem* to = scratch;
+  for (unsigned shift = 0; shift < bits; shift += 8) {
+    uint32_t count[257] = {};
+    for (size_t i = 0; i < n; ++i) ++count[((from[i].key >> shift) & 0xff) + 1];
+    for (unsigned d = 0; d < 256; ++d) count[d + 1] += count[d];
+    for (size_t i = 0; i < n; ++i) to[count[(from[i].key >> shift) & 0xff]++] = from[i];
+    std::swap(from, to);
+  }
+  if (from != items) std::copy(from, from + n, items);
+}
+
+// Runs fn(begin, end) over [0, count) on `threads` threads (the caller's included).
+void spawn_parallel_for(unsigned threads, size_t count, const std::function<void(size_t, size_t)>& fn) {
+  const size_t parts = std::max<size_t>(1, std::min<size_t>(threads, count));
+  std::vector<std::thread> pool;
+  for (size_t p = 1; p < parts; ++p) pool.emplace_back([&, p] { fn(count * p / parts, count * (p + 1) / parts); });
+  fn(0, count / parts);
+  for (auto& t : pool) t.join();
+}
+
+}  // namespace
+
+Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method, const BatchOptions& options,
+                              BatchAnswers& out) const {
+  const unsigned kernel = options.kernel;
+  if (kernel == 0 || kernel % 2 == 0 || kernel > kMaxPcfKernel)
+    return make_error(ErrorCode::invalid_input,
+                      "pcf kernel must be odd and in [1, " + std::to_string(kMaxPcfKernel) + "]");
+  if (Status s = check_method(method); !s) return s;
+  const double bias_world = options.bias.value_or(meta_.default_bias);
+  if (!std::isfinite(bias_world) || bias_world < 0)
+    return make_error(ErrorCode::invalid_input, "bias must be finite and >= 0");
+  auto max_level_or = tile_max_level(options.level);
+  if (!max_level_or) return max_level_or.error();
+  const unsigned max_level = *max_level_or;
+  const std::optional<unsigned> level = options.level;
+  // Coarse levels answered by the top tree, as query() does.
+  const bool coarse = level && *level < layout_.tile_level() && top_trees_.count(method);
+
+  const size_t n = points.size();
+  out.lit.assign(n, 1.0f);
+  out.outside.clear();
+  if (n == 0) return {};
+  auto parallel_for = [&](size_t count, const std::function<void(size_t, size_t)>& fn) {
+    if (options.parallel_for) return options.parallel_for(count, fn);
+    unsigned threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+    spawn_parallel_for(threads, count, fn);
+  };
+  std::mutex error_mutex;
+  std::optional<Error> first_error;
+  std::atomic<bool> failed{false};
+  auto fail = [&](Error e) {
+    std::lock_guard lock(error_mutex);
+    if (!first_error) first_error = std::move(e);
+    failed = true;
+  };
+
+  const unsigned key_bits = 2 * unsigned(std::countr_zero(layout_.resolution()));
+  const unsigned bucket_bits = std::min(key_bits, kBucketBits);
+  const unsigned low_bits = key_bits - bucket_bits;
+  const size_t buckets = size_t(1) << bucket_bits;  // + 1: off the map
+  const size_t chunks = (n + kPointsPerChunk - 1) / kPointsPerChunk;
+  std::vector<BatchItem> items(n), sorted(n);
+  std::vector<uint32_t> histogram(chunks * (buckets + 1), 0);
+  const double resolution = layout_.resolution();
+  auto bucket_of = [&](uint64_t key) { return key == kOffMap ? buckets : size_t(key >> low_bits); };
+
+  // A: transform, key, histogram.
+  parallel_for(chunks, [&](size_t c0, size_t c1) {
+    for (size_t c = c0; c < c1 && !failed; ++c) {
+      uint32_t* hist = &histogram[c * (buckets + 1)];
+      for (size_t i = c * kPointsPerChunk, end = std::min(n, i + kPointsPerChunk); i < end; ++i) {
+        const Vec3& p = points[i];
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+          return fail(make_error(ErrorCode::invalid_input, "point coordinates must be finite"));
+        const LightSpacePoint light = frame_.to_light(p);
+        BatchItem& item = items[i];
+        item.index = uint32_t(i);
+        if (!(light.u >= 0 && light.u < resolution && light.v >= 0 && light.v < resolution)) {
+          item.key = kOffMap;
+          item.threshold = 0;
+        } else {
+          item.key = morton_encode(uint32_t(light.u), uint32_t(light.v));
+          item.threshold = biased_depth(light.depth, bias_world);
+        }
+        ++hist[bucket_of(item.key)];
+      }
+    }
+  });
+  if (first_error) return *first_error;
+  // Offsets: bucket-major, chunk-minor, so the scatter is stable.
+  std::vector<uint32_t> bucket_start(buckets + 2, 0);
+  {
+    uint32_t at = 0;
+    for (size_t b = 0; b <= buckets; ++b) {
+      bucket_start[b] = at;
+      for (size_t c = 0; c < chunks; ++c) {
+        uint32_t& h = histogram[c * (buckets + 1) + b];
+        const uint32_t count = h;
+        h = at;
+        at += count;
+      }
+    }
+    bucket_start[buckets + 1] = at;
+  }
+  // B: scatter.
+  parallel_for(chunks, [&](size_t c0, size_t c1) {
+    for (size_t c = c0; c < c1; ++c) {
+      uint32_t* offset = &histogram[c * (buckets + 1)];
+      for (size_t i = c * kPointsPerChunk, end = std::min(n, i + kPointsPerChunk); i < end; ++i)
+        sorted[offset[bucket_of(items[i].key)]++] = items[i];
+    }
+  });
+  for (uint32_t i = bucket_start[buckets]; i < bucket_start[buckets + 1]; ++i) out.outside.push_back(sorted[i].index);
+  std::sort(out.outside.begin(), out.outside.end());
+
+  // C: buckets claimed by workers; sorted in cache, then walked per tile run.
+  const unsigned tile_key_shift = 2 * tile_shift_;
+  const uint32_t tile_mask = layout_.tile_size() - 1;
+  const double k2 = double(kernel) * kernel;
+  std::atomic<size_t> next_bucket{0};
+  const unsigned workers = options.parallel_for ? unsigned(std::min<size_t>(buckets, 64))
+                                                : (options.threads ? options.threads
+                                                                   : std::max(1u, std::thread::hardware_concurrency()));
+  parallel_for(workers, [&](size_t, size_t) {
+    std::shared_ptr<const DecodedTile> tile;  // this worker's current tile (one lookup per run)
+    uint64_t tile_id = kOffMap;
+    TexelQuery queries[kQueryBlock];
+    uint32_t query_index[kQueryBlock];
+    uint8_t lit[kQueryBlock];
+    for (size_t b; !failed && (b = next_bucket.fetch_add(1, std::memory_order_relaxed)) < buckets;) {
+      const uint32_t s = bucket_start[b], e = bucket_start[b + 1];
+      if (s == e) continue;
+      sort_low_bits(&sorted[s], &items[s], e - s, low_bits);
+      for (uint32_t run = s; run < e && !failed;) {
+        const uint64_t id = sorted[run].key >> tile_key_shift;
+        uint32_t run_end = run + 1;
+        while (run_end < e && (sorted[run_end].key >> tile_key_shift) == id) ++run_end;
+        const uint32_t tu = morton_u(sorted[run].key) >> tile_shift_, tv = morton_v(sorted[run].key) >> tile_shift_;
+        if (id != tile_id) {
+          auto found = shared_tile(store::TileKey{method, layout_.tile_level(), tu, tv}, 0);
+          if (!found) return fail(found.error());
+          tile = std::move(*found);
+          tile_id = id;
+        }
+        if (kernel == 1) {
+          if (coarse) {
+            for (uint32_t i = run; i < run_end; ++i) {
+              const BatchItem& item = sorted[i];
+              auto value = top_value(method, morton_u(item.key), morton_v(item.key), *level);
+              out.lit[item.index] = value ? float(item.threshold <= *value) : 1.0f;
+            }
+          } else if (tile) {
+            for (uint32_t i = run; i < run_end;) {
+              const size_t block = std::min<size_t>(kQueryBlock, run_end - i);
+              for (size_t j = 0; j < block; ++j) {
+                const BatchItem& item = sorted[i + j];
+                queries[j] = {morton_u(item.key) & tile_mask, morton_v(item.key) & tile_mask, item.threshold};
+                query_index[j] = item.index;
+              }
+              tile->lit_sorted({queries, block}, max_level, lit);
+              for (size_t j = 0; j < block; ++j) out.lit[query_index[j]] = lit[j] ? 1.0f : 0.0f;
+              i += uint32_t(block);
+            }
+          }  // empty tile: lit (already 1)
+        } else {
+          const int64_t half = kernel / 2, size = layout_.tile_size();
+          for (uint32_t i = run; i < run_end; ++i) {
+            const BatchItem& item = sorted[i];
+            const int64_t gu = morton_u(item.key), gv = morton_v(item.key);
+            const int64_t lu = gu & tile_mask, lv = gv & tile_mask;
+            uint64_t count;
+            if (!level && tile && lu >= half && lv >= half && lu + half < size && lv + half < size) {
+              count = tile->lit_count(uint32_t(lu - half), uint32_t(lv - half), kernel, kernel, item.threshold);
+            } else if (!level && !tile && lu >= half && lv >= half && lu + half < size && lv + half < size) {
+              count = uint64_t(kernel) * kernel;  // inside an empty tile: all lit
+            } else {
+              auto samples = pcf_lit_samples(method, gu, gv, kernel, item.threshold, max_level, level);
+              if (!samples) return fail(samples.error());
+              count = *samples;
+            }
+            out.lit[item.index] = float(double(count) / k2);
+          }
+        }
+        run = run_end;
+      }
+    }
+  });
+  if (first_error) return *first_error;
+  return {};
+}
+
+}  // namespace shadowtiles

@@ -1,0 +1,179 @@
+// ShadowMap::query_batch on a real store with every method: each batch answer equals the
+// single-point answer (query / query_pcf) exactly, for every method, PCF kernels 1..63, points on
+// tile borders and off the map, coarse levels, shuffled orders, 1 or 2 threads or a caller's pool;
+// bad batches are errors.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <thread>
+
+#include "builder/build_job.hpp"
+#include "builder/receiver_sampler.hpp"
+#include "builder/scene_loader.hpp"
+#include "client/shadow_map.hpp"
+#include "tests/testing_support.hpp"
+
+namespace shadowtiles {
+namespace {
+
+class ShadowMapBatchTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new testing::TempDir();
+    BuildConfig config;
+    config.scene_path = testing::shared_scene("fzk_haus/fzk_haus.obj");
+    config.store_path = dir_->path() / "store";
+    config.resolution = 512;
+    config.tile_size = 64;
+    config.load.up = UpAxis::y;
+    config.light_direction = *light_direction_from_sun(120, 35, UpAxis::y);
+    config.methods = {store::Method::raw, store::Method::mh,   store::Method::mmh,
+                      store::Method::dagmh, store::Method::cpvs, store::Method::sst};
+    ASSERT_TRUE(run_build(config).ok());
+    auto scene = load_scene(config.scene_path, config.load);
+    ASSERT_TRUE(scene.ok());
+    auto map = ShadowMap::open(config.store_path);
+    ASSERT_TRUE(map.ok());
+    const ShadowMap& m = **map;
+    points_ = new std::vector<Vec3>;
+    for (const Receiver& r : sample_receivers(*scene, 1500, 3)) points_->push_back(r.position);
+    // Texels on and beside every tile border (kernels there cross into the neighbours), on the
+    // stored surface and just above it, and points off the map.
+    std::mt19937 rng(11);
+    const uint32_t T = m.layout().tile_size(), R = m.layout().resolution();
+    for (int i = 0; i < 1500; ++i) {
+      uint32_t u = uint32_t(rng() % R), v = uint32_t(rng() % R);
+      const int offset = int(rng() % 7) - 3;
+      if (i % 2) u = std::clamp<int64_t>(int64_t(u / T) * T + offset, 0, R - 1);
+      else v = std::clamp<int64_t>(int64_t(v / T) * T + offset, 0, R - 1);
+      auto value = m.texel_value(store::Method::raw, u, v);
+      ASSERT_TRUE(value.ok());
+      const double depth = std::isfinite(*value) ? double(*value) - (i % 3) * 1e-4 : 0.5;
+      points_->push_back(m.frame().to_world({u + 0.5, v + 0.5, depth}));
+    }
+    points_->push_back(m.frame().to_world({-3.0, 10.0, 0.5}));
+    points_->push_back(m.frame().to_world({R + 0.5, R + 2.0, 0.2}));
+    points_->push_back(m.frame().to_world({0.0, 0.0, 0.999}));
+    points_->push_back(m.frame().to_world({R - 0.01, R - 0.01, 0.1}));
+  }
+  static void TearDownTestSuite() {
+    delete points_;
+    delete dir_;
+  }
+  static std::filesystem::path store() { return dir_->path() / "store"; }
+  static testing::TempDir* dir_;
+  static std::vector<Vec3>* points_;
+};
+testing::TempDir* ShadowMapBatchTest::dir_ = nullptr;
+std::vector<Vec3>* ShadowMapBatchTest::points_ = nullptr;
+
+// Single-point answers as the batch reports them.
+std::vector<float> single_answers(const ShadowMap& map, store::Method method, std::span<const Vec3> points,
+                                  unsigned kernel, std::optional<unsigned> level, std::vector<uint32_t>* outside) {
+  std::vector<float> lit;
+  for (size_t i = 0; i < points.size(); ++i) {
+    ShadowAnswer answer;
+    if (kernel == 1) {
+      auto a = map.query(points[i], method, {}, level);
+      EXPECT_TRUE(a.ok());
+      answer = *a;
+      lit.push_back(a->lit ? 1.0f : 0.0f);
+    } else {
+      auto f = map.query_pcf(points[i], method, kernel, {}, level, &answer);
+      EXPECT_TRUE(f.ok());
+      lit.push_back(float(*f));
+    }
+    if (answer.outside_map) outside->push_back(uint32_t(i));
+  }
+  return lit;
+}
+
+TEST_F(ShadowMapBatchTest, BatchEqualsSinglePointForEveryMethodAndKernel) {
+  auto map = ShadowMap::open(store());
+  ASSERT_TRUE(map.ok());
+  const ShadowMap& m = **map;
+  size_t checked = 0, shadowed = 0, partial = 0;
+  for (store::Method method : m.meta().methods) {
+    for (unsigned kernel : {1u, 3u, 5u, 7u, 9u, 15u, 63u}) {
+      std::vector<uint32_t> outside;
+      const std::vector<float> expected = single_answers(m, method, *points_, kernel, {}, &outside);
+      for (unsigned threads : {1u, 2u}) {
+        ShadowMap::BatchOptions options;
+        options.kernel = kernel;
+        options.threads = threads;
+        ShadowMap::BatchAnswers answers;
+        ASSERT_TRUE(m.query_batch(*points_, method, options, answers).ok());
+        ASSERT_EQ(answers.lit.size(), expected.size());
+        for (size_t i = 0; i < expected.size(); ++i)
+          ASSERT_EQ(answers.lit[i], expected[i]) << store::method_name(method) << " k" << kernel << " point " << i;
+        EXPECT_EQ(answers.outside, outside);
+      }
+      checked += expected.size();
+      shadowed += std::count(expected.begin(), expected.end(), 0.0f);
+      for (float f : expected) partial += f > 0 && f < 1;
+      EXPECT_EQ(outside.size(), 2u) << "the two points placed off the map";
+    }
+  }
+  EXPECT_GT(shadowed, checked / 20) << "the points see both light and shadow";
+  EXPECT_GT(partial, 1000u) << "PCF kernels straddle shadow edges";
+}
+
+TEST_F(ShadowMapBatchTest, CoarseLevelsShuffledOrdersAndPoolsAgree) {
+  auto map = ShadowMap::open(store());
+  ASSERT_TRUE(map.ok());
+  const ShadowMap& m = **map;
+  std::vector<Vec3> shuffled = *points_;
+  std::shuffle(shuffled.begin(), shuffled.end(), std::mt19937(4));
+  for (store::Method method : m.meta().methods) {
+    for (std::optional<unsigned> level : {std::optional<unsigned>{1}, std::optional<unsigned>{5}, std::optional<unsigned>{}}) {
+      for (unsigned kernel : {1u, 3u}) {
+        std::vector<uint32_t> outside;
+        const std::vector<float> expected = single_answers(m, method, shuffled, kernel, level, &outside);
+        ShadowMap::BatchOptions options;
+        options.kernel = kernel;
+        options.level = level;
+        // A caller's pool: three uneven parts on two threads.
+        options.parallel_for = [](size_t count, const std::function<void(size_t, size_t)>& fn) {
+          std::thread other([&] { fn(count / 3, count); });
+          fn(0, count / 3);
+          other.join();
+        };
+        ShadowMap::BatchAnswers answers;
+        ASSERT_TRUE(m.query_batch(shuffled, method, options, answers).ok());
+        EXPECT_EQ(answers.lit, expected) << store::method_name(method) << " level " << level.value_or(99) << " k" << kernel;
+        EXPECT_EQ(answers.outside, outside);
+      }
+    }
+  }
+}
+
+TEST_F(ShadowMapBatchTest, BadBatchesAreErrors) {
+  auto map = ShadowMap::open(store());
+  ASSERT_TRUE(map.ok());
+  const ShadowMap& m = **map;
+  ShadowMap::BatchAnswers answers;
+  std::vector<Vec3> points(points_->begin(), points_->begin() + 100);
+  EXPECT_TRUE(m.query_batch({}, store::Method::mh, {}, answers).ok());
+  EXPECT_TRUE(answers.lit.empty());
+  points[57] = {0, NAN, 0};
+  auto bad = m.query_batch(points, store::Method::mh, {}, answers);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().code, ErrorCode::invalid_input);
+  points[57] = (*points_)[0];
+  ShadowMap::BatchOptions options;
+  options.kernel = 4;
+  EXPECT_EQ(m.query_batch(points, store::Method::mh, options, answers).error().code, ErrorCode::invalid_input);
+  options.kernel = 1;
+  options.bias = -1.0;
+  EXPECT_EQ(m.query_batch(points, store::Method::mh, options, answers).error().code, ErrorCode::invalid_input);
+  options.bias = {};
+  options.level = 10;
+  EXPECT_EQ(m.query_batch(points, store::Method::mh, options, answers).error().code, ErrorCode::invalid_input);
+  options.level = {};
+  EXPECT_TRUE(m.query_batch(points, store::Method::mh, options, answers).ok());
+  EXPECT_EQ(answers.lit.size(), points.size());
+}
+
+}  // namespace
+}  // namespace shadowtiles
