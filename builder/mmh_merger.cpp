@@ -1,6 +1,8 @@
 #include "builder/mmh_merger.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <cstring>
 #include <limits>
 #include <unordered_map>
 
@@ -23,12 +25,34 @@ uint64_t mix(uint64_t h, uint64_t x) {  // splitmix64 finaliser over a running c
 
 enum class Match { ok, topology, intervals };
 
+// A point-like interval intersects another point-like interval only when the two are equal: a
+// point [c, c] with c < 1 (every surface hit on an open mesh), or the miss [1, +inf). Its key is the
+// point's bit pattern (+0 and -0 alike) or, for the miss, a pattern no float has.
+bool point_key(const DepthInterval& x, uint64_t* key) {
+  if (x.lower == x.upper && x.lower < 1.0f) {
+    const float c = x.lower == 0.0f ? 0.0f : x.lower;
+    uint32_t bits;
+    std::memcpy(&bits, &c, sizeof bits);
+    *key = bits;
+    return true;
+  }
+  if (x.lower == 1.0f && x.upper == kInf) {
+    *key = uint64_t(1) << 40;
+    return true;
+  }
+  return false;
+}
+
 struct Merger {
   MhHierarchy& h;
   std::vector<uint8_t> height;
   std::vector<uint64_t> hash;
   std::vector<DepthInterval> hull;  // [min lower, max upper] of the subtree's valued intervals
   std::vector<uint8_t> dead;
+  // Per block: every valued interval of its subtree is point-like (see point_key), and the hash of
+  // those keys in subtree order. Only computed when the options ask for the point index.
+  std::vector<uint8_t> point_like;
+  std::vector<uint64_t> point_hash;
 
   uint32_t child(uint32_t b, unsigned r) const { return h.child_block[h.block_first_child[b] + r]; }
   DepthInterval& interval(uint32_t b, unsigned v) { return h.intervals[h.block_first_value[b] + v]; }
@@ -38,18 +62,27 @@ struct Merger {
     uint64_t hb = mix(0x6d68, mask);
     unsigned ht = 0;
     DepthInterval hl{kInf, -kInf};
-    for (unsigned v = 0; v < F::valued_children(mask); ++v)
-      hl.lower = std::min(hl.lower, interval(b, v).lower), hl.upper = std::max(hl.upper, interval(b, v).upper);
+    const bool index = !point_like.empty();
+    bool points = true;
+    uint64_t ph = 0x706f;
+    for (unsigned v = 0; v < F::valued_children(mask); ++v) {
+      const DepthInterval& x = interval(b, v);
+      hl.lower = std::min(hl.lower, x.lower), hl.upper = std::max(hl.upper, x.upper);
+      uint64_t key = 0;
+      if (index && (points = points && point_key(x, &key))) ph = mix(ph, key);
+    }
     for (unsigned r = 0; r < F::branch_children(mask); ++r) {
       const uint32_t c = child(b, r);
       summarize(c);
       hb = mix(hb, hash[c]);
       ht = std::max(ht, unsigned(height[c]) + 1);
       hl.lower = std::min(hl.lower, hull[c].lower), hl.upper = std::max(hl.upper, hull[c].upper);
+      if (index && (points = points && point_like[c])) ph = mix(ph, point_hash[c]);
     }
     hash[b] = hb;
     height[b] = uint8_t(ht);
     hull[b] = hl;
+    if (index) point_like[b] = points, point_hash[b] = ph;
   }
 
   Match compare(uint32_t a, uint32_t r) {
@@ -146,8 +179,14 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
     return compact(h);
   }
 
-  Merger m{h, std::vector<uint8_t>(n, 0), std::vector<uint64_t>(n, 0), std::vector<DepthInterval>(n),
-           std::vector<uint8_t>(n, 0)};
+  const bool index_points = options.index_point_values;
+  Merger m{h,
+           std::vector<uint8_t>(n, 0),
+           std::vector<uint64_t>(n, 0),
+           std::vector<DepthInterval>(n),
+           std::vector<uint8_t>(n, 0),
+           std::vector<uint8_t>(index_points ? n : 0, 0),
+           std::vector<uint64_t>(index_points ? n : 0, 0)};
   m.summarize(h.root_block);
   // Tallest first; among equals, breadth-first order.
   std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return m.height[a] > m.height[b]; });
@@ -161,6 +200,10 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
     std::vector<uint32_t> block;
     std::vector<float> height;  // as float, so the filter loop compares one type
     std::vector<float> hull_lower, hull_upper, first_lower, first_upper;
+    // Point index: per rep, the previous rep of this bucket with the same point hash (kNone: none);
+    // and the reps that were not point-like when they joined, in order.
+    std::vector<uint32_t> previous_same_points;
+    std::vector<uint32_t> not_point;
     size_t size() const { return block.size(); }
     void push(uint32_t b, float ht, const DepthInterval& hull, const DepthInterval& first) {
       block.push_back(b), height.push_back(ht);
@@ -173,48 +216,127 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
     return m.interval(b, 0);
   };
   std::unordered_map<uint64_t, Reps> buckets;
+  // (bucket, point hash) -> the bucket's most recent point-like rep with that hash: a flat
+  // open-addressing table of 8-byte slots (tag | 1 + point rep id), verified against the point reps'
+  // own arrays. std::unordered_map's node per entry, or wider slots, cost more than the scan saves.
+  struct PointRep {
+    uint64_t bucket;  // bucket key
+    uint64_t point_hash;
+    uint32_t rep;  // index in its bucket
+  };
+  std::vector<PointRep> point_reps;
+  // Reused per thread: a fresh table would pay a page fault per 4 KiB on every tile.
+  thread_local std::vector<uint64_t> latest_with_points;
+  latest_with_points.assign(index_points ? std::bit_ceil(std::max<size_t>(16, 2 * order.size())) : 0, 0);
+  // The slot for (bucket, point hash): holds its latest point rep, or is the free slot to claim.
+  auto slot_hash = [](uint64_t bucket, uint64_t point_hash) { return mix(point_hash, bucket); };
+  auto latest_slot = [&](uint64_t bucket, uint64_t point_hash) -> uint64_t& {
+    const size_t mask = latest_with_points.size() - 1;
+    const uint64_t full = slot_hash(bucket, point_hash);
+    const uint64_t tag = full >> 32;
+    for (size_t i = size_t(full) & mask;; i = (i + 1) & mask) {
+      uint64_t& slot = latest_with_points[i];
+      if (slot == 0) return slot;
+      if ((slot >> 32) != tag) continue;
+      const PointRep& r = point_reps[uint32_t(slot) - 1];
+      if (r.bucket == bucket && r.point_hash == point_hash) return slot;
+    }
+  };
+  auto slot_rep = [&](uint64_t slot) { return slot == 0 ? kNone : point_reps[uint32_t(slot) - 1].rep; };
   uint64_t scanned = 0;
-  for (const uint32_t b : order) {
+  auto bucket_key_of = [&](uint32_t b) { return mix(m.height[b], m.hash[b] & hash_mask); };
+  constexpr size_t kPrefetchAhead = 16;  // table slots are DRAM misses: fetch them this many blocks early
+  for (size_t position = 0; position < order.size(); ++position) {
+    const uint32_t b = order[position];
+    if (index_points && position + kPrefetchAhead < order.size()) {
+      const uint32_t ahead = order[position + kPrefetchAhead];
+      if (m.point_like[ahead])
+        __builtin_prefetch(&latest_with_points[slot_hash(bucket_key_of(ahead), m.point_hash[ahead]) &
+                                               (latest_with_points.size() - 1)]);
+    }
     if (m.dead[b] || b == h.root_block) continue;
-    Reps& reps = buckets[mix(m.height[b], m.hash[b] & hash_mask)];
+    const uint64_t bucket_key = bucket_key_of(b);
+    Reps& reps = buckets[bucket_key];
     const DepthInterval first = first_interval(b), hull = m.hull[b];
     const float height = m.height[b];
     const size_t stop = reps.size() > options.max_tests_per_block ? reps.size() - options.max_tests_per_block : 0;
+    auto try_merge = [&](size_t k) {  // full test against rep k; on a fit, b joins it
+      ++st.full_tests;
+      const Match match = m.compare(b, reps.block[k]);
+      if (match == Match::topology) ++st.topology_mismatches;
+      if (match != Match::ok) return false;
+      m.narrow(reps.block[k], b);
+      const DepthInterval narrowed = first_interval(reps.block[k]);
+      reps.first_lower[k] = narrowed.lower, reps.first_upper[k] = narrowed.upper;
+      h.child_block[parent_entry[b]] = reps.block[k];
+      m.kill(b);
+      ++st.merges;
+      return true;
+    };
     bool merged = false;
-    for (size_t end = reps.size(); end > stop && !merged;) {
-      const size_t begin = std::max(stop, end >= 64 ? end - 64 : size_t(0));
-      // pass[i]: candidate begin + i passes the filters (intersecting hulls and first intervals; same
-      // height: bucket keys may collide across heights).
-      const size_t count = end - begin;
-      const float* hl = reps.hull_lower.data() + begin;
-      const float* hu = reps.hull_upper.data() + begin;
-      const float* fl = reps.first_lower.data() + begin;
-      const float* fu = reps.first_upper.data() + begin;
-      const float* ht = reps.height.data() + begin;
-      alignas(64) int32_t pass[64];
-      for (size_t k = 0; k < count; ++k)  // float compares only, no branches: this loop vectorises
-        pass[k] = (hl[k] <= hull.upper) & (hull.lower <= hu[k]) & (fl[k] <= first.upper) &
-                  (first.lower <= fu[k]) & (ht[k] == height);
-      scanned += count;
-      for (size_t i = count; i-- > 0;) {  // most recent first
-        if (!pass[i]) continue;
-        const size_t k = begin + i;
-        ++st.full_tests;
-        const Match match = m.compare(b, reps.block[k]);
-        if (match == Match::topology) ++st.topology_mismatches;
-        if (match != Match::ok) continue;
-        m.narrow(reps.block[k], b);
-        const DepthInterval narrowed = first_interval(reps.block[k]);
-        reps.first_lower[k] = narrowed.lower, reps.first_upper[k] = narrowed.upper;
-        h.child_block[parent_entry[b]] = reps.block[k];
-        m.kill(b);
-        ++st.merges;
-        merged = true;
-        break;
+    const bool point_like = index_points && m.point_like[b];
+    uint64_t* latest = nullptr;
+    if (point_like) {
+      // Intervals only shrink under narrowing, so a rep that fits b now fitted b when it joined. A rep
+      // that was point-like then fits only blocks with its exact point keys, i.e. its point hash; the
+      // others are the reps that were not point-like. Walking both lists most recent first, inside the
+      // same window, finds the same first fit as the scan below, without testing the other reps.
+      latest = &latest_slot(bucket_key, m.point_hash[b]);  // at most one slot per block: never full
+      uint32_t same = slot_rep(*latest);
+      size_t other = reps.not_point.size();
+      while (!merged) {
+        const bool have_same = same != kNone && same >= stop;
+        const bool have_other = other > 0 && reps.not_point[other - 1] >= stop;
+        if (!have_same && !have_other) break;
+        ++scanned;
+        if (have_same && (!have_other || same > reps.not_point[other - 1])) {
+          merged = try_merge(same);
+          same = reps.previous_same_points[same];
+          continue;
+        }
+        const size_t k = reps.not_point[--other];
+        const bool pass = reps.hull_lower[k] <= hull.upper && hull.lower <= reps.hull_upper[k] &&
+                          reps.first_lower[k] <= first.upper && first.lower <= reps.first_upper[k] &&
+                          reps.height[k] == height;
+        if (pass) merged = try_merge(k);
       }
-      end = begin;
+    } else {
+      for (size_t end = reps.size(); end > stop && !merged;) {
+        const size_t begin = std::max(stop, end >= 64 ? end - 64 : size_t(0));
+        // pass[i]: candidate begin + i passes the filters (intersecting hulls and first intervals; same
+        // height: bucket keys may collide across heights).
+        const size_t count = end - begin;
+        const float* hl = reps.hull_lower.data() + begin;
+        const float* hu = reps.hull_upper.data() + begin;
+        const float* fl = reps.first_lower.data() + begin;
+        const float* fu = reps.first_upper.data() + begin;
+        const float* ht = reps.height.data() + begin;
+        alignas(64) int32_t pass[64];
+        for (size_t k = 0; k < count; ++k)  // float compares only, no branches: this loop vectorises
+          pass[k] = (hl[k] <= hull.upper) & (hull.lower <= hu[k]) & (fl[k] <= first.upper) &
+                    (first.lower <= fu[k]) & (ht[k] == height);
+        scanned += count;
+        for (size_t i = count; i-- > 0;) {  // most recent first
+          if (pass[i] && try_merge(begin + i)) {
+            merged = true;
+            break;
+          }
+        }
+        end = begin;
+      }
     }
-    if (!merged) reps.push(b, height, hull, first);
+    if (merged) continue;
+    if (index_points) {
+      if (point_like) {
+        reps.previous_same_points.push_back(slot_rep(*latest));
+        point_reps.push_back({bucket_key, m.point_hash[b], uint32_t(reps.size())});
+        *latest = (slot_hash(bucket_key, m.point_hash[b]) >> 32) << 32 | uint64_t(point_reps.size());
+      } else {
+        reps.previous_same_points.push_back(kNone);
+        reps.not_point.push_back(uint32_t(reps.size()));
+      }
+    }
+    reps.push(b, height, hull, first);
   }
   st.hull_rejections = scanned - st.full_tests;  // includes the rare bucket-key collisions across heights
   MhHierarchy out = compact(h);

@@ -9,7 +9,10 @@
 // recent first (neighbours in breadth-first order are near in space), at most
 // `max_tests_per_block` of them; a test first rejects on the subtrees' aggregate interval hulls,
 // then compares the structure and intervals fully (hash equality is never trusted). First fit wins;
-// a block that fits nowhere becomes a representative.
+// a block that fits nowhere becomes a representative. A block whose intervals all have zero width
+// (or are misses) can only fit reps with the same values or reps that had a wider interval when they
+// joined, so it looks up the former by a hash of its values and scans only the latter: the same
+// first fit, at hash-table cost on open meshes, where the scan found nothing to merge.
 //
 // Input: a tree as produced by build_mh (each block referenced once). Errors: invalid_input for a
 // malformed hierarchy or one that already shares blocks. Output: a hierarchy of the same levels
@@ -28,6 +31,10 @@ struct MmhMergeOptions {
   // Bits of the topology hash used for bucketing (1..64). Test hook: few bits force collisions,
   // which the full structural comparison must reject.
   unsigned hash_bits = 64;
+  // Point index (same output, less work): blocks whose intervals are all point-like (zero width, or
+  // the miss) are matched through a hash of their values instead of a scan of the bucket; open
+  // meshes give nothing else. False: the plain scan, kept as the reference the tests compare with.
+  bool index_point_values = true;
 };
 
 struct MmhMergeStats {
