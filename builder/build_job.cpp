@@ -23,11 +23,13 @@
 #include "builder/mh_encoder.hpp"
 #include "builder/mmh_merger.hpp"
 #include "builder/tile_encoder.hpp"
+#include "builder/tile_preview_builder.hpp"
 #include "codec/store_meta.hpp"
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
 #include "store/serving_lock.hpp"
 #include "store/tile_key.hpp"
+#include "store/tile_preview.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -112,6 +114,8 @@ struct WorkerTotals {
   double store_seconds = 0;
   uint64_t stored_tiles = 0;
   uint64_t blob_bytes = 0;
+  uint64_t preview_bytes = 0;
+  double preview_seconds = 0;
   std::map<std::string, uint64_t> bytes_by_method;
   std::map<std::string, uint64_t> raw_bytes_by_method;
   std::map<std::string, uint64_t> reference_bytes_by_method;
@@ -200,7 +204,7 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
                               " holds a different build; pass --overwrite or choose another --out");
       spdlog::warn("overwriting the build in {}", config.store_path.string());
       for (auto which : {store::Database::meta, store::Database::tiles, store::Database::top,
-                         store::Database::progress})
+                         store::Database::progress, store::Database::preview})
         if (Status s = db.clear(which); !s) return s.error();
     }
   }
@@ -309,7 +313,16 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
           mine.reference_bytes_by_method[name] += encoded.reference_bytes;
           auto key = store::encode_tile_key({encoded.method, layout->tile_level(), tile.x, tile.y});
           puts.push_back({store::Database::tiles, {key.begin(), key.end()}, std::move(blob)});
+          // The inspector's preview of this tile, committed with it (store/tile_preview.hpp).
+          auto preview_start = Clock::now();
+          auto preview = make_tile_preview(*intervals, encoded.method, encoded.payload);
+          if (!preview) { fail(preview.error()); break; }
+          auto preview_blob = store::encode_preview(encoded.method, *preview, config.zstd_level);
+          mine.preview_seconds += seconds_since(preview_start);
+          mine.preview_bytes += preview_blob.size();
+          puts.push_back({store::Database::preview, {key.begin(), key.end()}, std::move(preview_blob)});
         }
+        if (failed) break;
         ++mine.stored_tiles;
       }
       puts.push_back({store::Database::progress, progress_key(tile), progress_value(!empty, root)});
@@ -331,6 +344,8 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
     totals.store_seconds += mine.store_seconds;
     totals.stored_tiles += mine.stored_tiles;
     totals.blob_bytes += mine.blob_bytes;
+    totals.preview_bytes += mine.preview_bytes;
+    totals.preview_seconds += mine.preview_seconds;
     for (auto& [k, v] : mine.bytes_by_method) totals.bytes_by_method[k] += v;
     for (auto& [k, v] : mine.raw_bytes_by_method) totals.raw_bytes_by_method[k] += v;
     for (auto& [k, v] : mine.reference_bytes_by_method) totals.reference_bytes_by_method[k] += v;
@@ -423,11 +438,13 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
       {"threads", thread_count},
       {"seconds", {{"load", load_stats.seconds}, {"index", index_seconds},
                    {"bvh_thread_sum", totals.depth.bvh_seconds}, {"rays_thread_sum", totals.depth.ray_seconds},
-                   {"encode_thread_sum", totals.encode_seconds}, {"store_thread_sum", totals.store_seconds},
+                   {"encode_thread_sum", totals.encode_seconds},
+                   {"preview_thread_sum", totals.preview_seconds}, {"store_thread_sum", totals.store_seconds},
                    {"render_wall", render_wall}, {"top_levels", top_seconds},
                    {"total", seconds_since(total_start)}}},
       {"bytes_by_method", bytes},
       {"top_bytes_by_method", top_bytes},
+      {"preview_bytes", totals.preview_bytes},
       {"reference_bytes_by_method", totals.reference_bytes_by_method},
       {"encode_seconds_by_method", totals.encode_seconds_by_method},
       {"payload_bytes_by_method", raw_bytes},

@@ -18,7 +18,7 @@ namespace {
 constexpr unsigned kMaxDbs = 8;                 // room for databases added later
 constexpr int kMaxMapResizedRetries = 8;        // another process may keep growing the map
 constexpr std::array<Database, kDatabaseCount> kAllDatabases = {
-    Database::meta, Database::tiles, Database::top, Database::progress};
+    Database::meta, Database::tiles, Database::top, Database::progress, Database::preview};
 
 size_t index_of(Database db) { return static_cast<size_t>(db); }
 
@@ -130,6 +130,7 @@ const char* database_name(Database db) {
     case Database::tiles: return "tiles";
     case Database::top: return "top";
     case Database::progress: return "progress";
+    case Database::preview: return "preview";
   }
   assert(false && "database_name: not a Database enumerator");
   return "unknown";

@@ -7,6 +7,7 @@
 //   tiles     tile blobs under TileKey bytes
 //   top       top-level tree and skip list
 //   progress  builder bookkeeping for resuming an interrupted build (may be absent in read-only)
+//   preview   per-tile previews under TileKey bytes (store/tile_preview.hpp; absent in older stores)
 //
 // Modes. read_only (serving): MDB_RDONLY | MDB_NOTLS, so any thread of a pool may read and reader
 // slots do not leak per thread; stale reader slots of dead processes are cleared at open
@@ -56,10 +57,10 @@ struct MDB_txn;
 
 namespace shadowtiles::store {
 
-enum class Database { meta, tiles, top, progress };
-inline constexpr size_t kDatabaseCount = 4;
+enum class Database { meta, tiles, top, progress, preview };
+inline constexpr size_t kDatabaseCount = 5;
 
-// The LMDB name of a database ("meta", "tiles", "top", "progress"); FORMAT.
+// The LMDB name of a database ("meta", "tiles", "top", "progress", "preview"); FORMAT.
 const char* database_name(Database db);
 
 // View a string key (e.g. of `meta`) as bytes. The view aliases `text`.
