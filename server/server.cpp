@@ -16,6 +16,7 @@
 #include "server/http_response.hpp"
 #include "server/routes_blobs.hpp"
 #include "server/routes_info.hpp"
+#include "server/routes_render.hpp"
 #include "server/routes_shadow.hpp"
 #include "server/service_state.hpp"
 #include "store/serving_lock.hpp"
@@ -194,6 +195,7 @@ Result<std::unique_ptr<Server>> Server::bind(const ServerConfig& config) {
   register_info_routes(http, state);
   register_shadow_routes(http, state);
   register_blob_routes(http, state);
+  register_render_routes(http, state);
 
   if (config.port == 0) {
     impl->port = http.bind_to_any_port(config.host);

@@ -48,6 +48,10 @@ Status ServerConfig::validate() const {
   if (keep_alive_timeout_s < 1 || keep_alive_timeout_s > 3600)
     return bad("keep_alive_timeout_s", "must be in [1, 3600]");
   if (reload_poll_s > 86400) return bad("reload_poll_s", "must be in [0, 86400] (0: reload on SIGHUP only)");
+  if (render_threads < 1 || render_threads > 64) return bad("render_threads", "must be in [1, 64]");
+  if (render_queue < 1 || render_queue > 4096) return bad("render_queue", "must be in [1, 4096]");
+  if (render_timeout_ms < 10 || render_timeout_ms > 600000) return bad("render_timeout_ms", "must be in [10, 600000]");
+  if (render_cache_bytes < (uint64_t(1) << 20)) return bad("render_cache_bytes", "must be at least 1 MiB");
   return {};
 }
 
@@ -67,7 +71,12 @@ nlohmann::json ServerConfig::to_json() const {
           {"max_connections", max_connections},
           {"keep_alive_max_count", keep_alive_max_count},
           {"keep_alive_timeout_s", keep_alive_timeout_s},
-          {"reload_poll_s", reload_poll_s}};
+          {"reload_poll_s", reload_poll_s},
+              {"render_threads", render_threads},
+          {"render_queue", render_queue},
+          {"render_timeout_ms", render_timeout_ms},
+          {"render_cache_bytes", render_cache_bytes},
+          {"leaflet_dir", leaflet_dir}};
 }
 
 Result<ServerConfig> ServerConfig::from_json(const nlohmann::json& json, ServerConfig config) {
@@ -114,6 +123,16 @@ Result<ServerConfig> ServerConfig::from_json(const nlohmann::json& json, ServerC
       {"keep_alive_timeout_s",
        [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.keep_alive_timeout_s); }},
       {"reload_poll_s", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.reload_poll_s); }},
+      {"leaflet_dir",
+       [&](const nlohmann::json& v, const std::string& k) -> Status {
+         if (!v.is_string()) return bad(k, "expected a string");
+         config.leaflet_dir = v.get<std::string>();
+         return {};
+       }},
+      {"render_threads", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.render_threads); }},
+      {"render_queue", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.render_queue); }},
+      {"render_timeout_ms", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.render_timeout_ms); }},
+      {"render_cache_bytes", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU64, config.render_cache_bytes); }},
   };
   for (const auto& [key, value] : json.items()) {
     if (key.starts_with("_")) continue;  // "_comment" and friends: documentation inside the file

@@ -37,6 +37,11 @@ struct ServerConfig {
   unsigned keep_alive_max_count = 100;   // requests per keep-alive connection
   unsigned keep_alive_timeout_s = 5;     // idle keep-alive connection closed after this
   unsigned reload_poll_s = 5;            // check the store path for a new build this often; 0: only on SIGHUP
+  unsigned render_threads = 1;           // the inspector's /v1/render pool, apart from the HTTP workers
+  unsigned render_queue = 32;            // renders waiting beyond this → 503
+  unsigned render_timeout_ms = 5000;     // one render's time budget → 503 when exceeded
+  uint64_t render_cache_bytes = uint64_t(48) << 20;  // decoded previews kept for rendering
+  std::string leaflet_dir = "/usr/share/javascript/leaflet";  // Debian's libjs-leaflet, served to the page
 
   // Range checks shared by the file parser and CLI overrides.
   Status validate() const;

@@ -15,12 +15,19 @@
 #include "server/batch_pool.hpp"
 #include "server/cors.hpp"
 #include "server/metrics.hpp"
+#include "server/render_pool.hpp"
+#include "server/tile_summary_cache.hpp"
 #include "server/server_config.hpp"
 
 namespace shadowtiles::server {
 
 struct ServiceState {
-  explicit ServiceState(ServerConfig c) : config(std::move(c)), cors(config.cors_origins), pool(config.threads) {}
+  explicit ServiceState(ServerConfig c)
+      : config(std::move(c)),
+        cors(config.cors_origins),
+        pool(config.threads),
+        render_cache(size_t(config.render_cache_bytes)),
+        render_pool(config.render_threads, config.render_queue) {}
 
   std::shared_ptr<const ShadowMap> map() const { return map_.load(std::memory_order_acquire); }
   void publish(std::shared_ptr<const ShadowMap> map) { map_.store(std::move(map), std::memory_order_release); }
@@ -29,6 +36,8 @@ struct ServiceState {
   const CorsPolicy cors;
   Metrics metrics;
   BatchPool pool;
+  TileSummaryCache render_cache;   // previews and tile sizes for /v1/render
+  RenderPool render_pool;          // /v1/render only, never the query workers (destroyed first)
 
  private:
   std::atomic<std::shared_ptr<const ShadowMap>> map_;

@@ -502,6 +502,34 @@ TEST_F(ServerTest, EveryBadInputGetsA4xxAndTheServerKeepsAnswering) {
       {std::string(7000, 'a').insert(0, 1, '/'), 404},
       {"/v1/tiles/raw/2/" + std::string(7000, '1') + "/0", 400},
       {"/v1/shadow?x=" + std::string(7000, '9') + "&y=0&z=0", 400},
+      // The inspector's rendered tiles (512^2 map: zooms 0..4) and texel route.
+      {"/v1/render/raw/5/0/0.png", 404},
+      {"/v1/render/raw/99999999999/0/0.png", 400},
+      {"/v1/render/raw/4294967295/0/0.png", 404},
+      {"/v1/render/raw/1/2/0.png", 404},
+      {"/v1/render/raw/1/0/2.png", 404},
+      {"/v1/render/raw/0/1/0.png", 404},
+      {"/v1/render/raw/-1/0/0.png", 400},
+      {"/v1/render/raw/0/0/x.png", 400},
+      {"/v1/render/raw/0/0/0.5.png", 400},
+      {"/v1/render/bogus/0/0/0.png", 400},
+      {"/v1/render/dagmh/0/0/0.png", 404},
+      {"/v1/render/raw/0/0/0.png?layer=heat", 400},
+      {"/v1/render/raw/0/0/0.png?layer=", 400},
+      {"/v1/render/raw/0/0/0.png?layer=diff", 400},
+      {"/v1/render/raw/0/0/0.png?layer=diff&against=dagmh", 404},
+      {"/v1/render/raw/0/0/0.png?layer=diff&against=bogus", 400},
+      {"/v1/render/raw/0/0/0.png?against=mh", 400},
+      {"/v1/render/raw/0/0/0.png?layer=value&layer=depth", 400},
+      {"/v1/render/raw/0/0/0.png?foo=1", 400},
+      {"/v1/builds/nope/render/raw/0/0/0.png", 404},
+      {"/v1/render/legend?layer=x", 400},
+      {"/v1/texel?u=512&v=0", 404},
+      {"/v1/texel?u=a&v=0", 400},
+      {"/v1/texel?u=1", 400},
+      {"/v1/texel?u=1&v=1&u=2", 400},
+      {"/inspector/leaflet/../../etc/passwd", 404},
+      {"/inspector/nope.js", 404},
   };
   for (const auto& [url, status] : gets) expect_json_error(cli.Get(url), status, "GET " + url.substr(0, 80));
   {
@@ -583,6 +611,77 @@ TEST_F(ServerTest, EveryBadInputGetsA4xxAndTheServerKeepsAnswering) {
 
 // 8 client threads x 1,000 mixed requests against the 2-thread server: no errors, every answer
 // equals the decoder's.
+TEST_F(ServerTest, RenderedTilesArePngsFromPreviewsThenTilesWithEtags) {
+  auto cli = server_->client();
+  const std::string png_magic("\x89PNG\r\n\x1a\n", 8);
+  std::map<std::string, std::string> bodies;
+  for (std::string layer : {"value", "depth", "coverage", "bytes", "diff&against=raw"}) {
+    auto res = cli.Get("/v1/render/mh/0/0/0.png?layer=" + layer);
+    ASSERT_TRUE(res);
+    ASSERT_EQ(res->status, 200) << layer << ": " << res->body;
+    EXPECT_EQ(res->get_header_value("Content-Type"), "image/png");
+    EXPECT_EQ(res->body.substr(0, 8), png_magic) << layer;
+    // Zoom 0 of a 512^2 map in 128^2 tiles is exactly the previews' resolution: no tile decoded.
+    EXPECT_EQ(res->get_header_value("X-Shadowtiles-Source"), "previews") << layer;
+    EXPECT_EQ(res->get_header_value("Cache-Control"), "public, no-cache");
+    bodies[layer] = res->body;
+    // Revalidation without rendering.
+    httplib::Headers h = {{"If-None-Match", res->get_header_value("ETag")}};
+    auto again = cli.Get("/v1/render/mh/0/0/0.png?layer=" + layer, h);
+    ASSERT_TRUE(again);
+    EXPECT_EQ(again->status, 304) << layer;
+  }
+  EXPECT_NE(bodies["value"], bodies["coverage"]);
+  EXPECT_NE(bodies["value"], bodies["depth"]);
+  auto raw = cli.Get("/v1/render/raw/0/0/0.png");
+  ASSERT_TRUE(raw && raw->status == 200);
+  EXPECT_NE(raw->get_header_value("ETag"), cli.Get("/v1/render/mh/0/0/0.png")->get_header_value("ETag"));
+  // Finer zooms decode tiles; the finest magnifies.
+  for (std::string url : {"/v1/render/mh/1/1/1.png", "/v1/render/mh/4/7/7.png?layer=diff&against=raw"}) {
+    auto res = cli.Get(url);
+    ASSERT_TRUE(res);
+    ASSERT_EQ(res->status, 200) << url << ": " << res->body;
+    EXPECT_EQ(res->get_header_value("X-Shadowtiles-Source"), "tiles") << url;
+  }
+  // Under the build id the tile is immutable.
+  auto id = json::parse(cli.Get("/v1/meta")->body)["shadow"]["build_id"].get<std::string>();
+  auto versioned = cli.Get("/v1/builds/" + id + "/render/mh/0/0/0.png?layer=depth");
+  ASSERT_TRUE(versioned && versioned->status == 200);
+  EXPECT_NE(versioned->get_header_value("Cache-Control").find("immutable"), std::string::npos);
+  auto legend = cli.Get("/v1/render/legend?layer=value");
+  ASSERT_TRUE(legend && legend->status == 200);
+  auto lg = json::parse(legend->body);
+  EXPECT_LT(lg["min"].get<double>(), lg["max"].get<double>());
+  EXPECT_GE(lg["stops"].size(), 2u);
+}
+
+TEST_F(ServerTest, TexelRouteGivesEachMethodsDecodedValueAndTileBytes) {
+  auto cli = server_->client();
+  int hits = 0;
+  for (uint32_t u : {10u, 200u, 255u, 300u, 511u})
+    for (uint32_t v : {0u, 128u, 256u, 400u}) {
+      auto res = cli.Get("/v1/texel?u=" + std::to_string(u) + "&v=" + std::to_string(v));
+      ASSERT_TRUE(res);
+      ASSERT_EQ(res->status, 200) << res->body;
+      auto body = json::parse(res->body);
+      EXPECT_EQ(body["tile"]["x"], u / 128);
+      EXPECT_EQ(body["tile"]["y"], v / 128);
+      ASSERT_EQ(body["methods"].size(), 3u);
+      for (const auto& m : body["methods"]) {
+        auto method = *store::parse_method(m["method"].get<std::string>());
+        auto expected = reference_->texel_value(method, u, v);
+        ASSERT_TRUE(expected.ok());
+        if (*expected < 1.0f) {
+          EXPECT_EQ(m["value"].get<float>(), *expected);
+          ++hits;
+        } else {
+          EXPECT_TRUE(m["miss"].get<bool>());
+        }
+      }
+    }
+  EXPECT_GT(hits, 0);
+}
+
 TEST_F(ServerTest, EightConcurrentClients) {
   constexpr int kThreads = 8, kRequests = 1000;
   const std::vector<Vec3>& points = *points_;
