@@ -15,7 +15,12 @@ packages=(
   python3-numpy            # the Python module (python/shadowtiles, ctypes over the C API) and examples
   dpkg-dev file            # cpack -G DEB: dpkg-shlibdeps and ELF detection (tests/install/package_test.sh)
   wrk curl                 # HTTP load benchmark (bench/server_load.sh)
+  libjs-leaflet            # the inspector page's map (served by `shadowtiles serve` from /usr/share/javascript/leaflet)
+  chromium nodejs          # the inspector's real-browser test (tests/browser), headless
 )
+# npm for playwright-core (tests/browser/package.json); a node distribution that ships npm itself
+# (NodeSource) conflicts with Debian's npm package.
+command -v npm > /dev/null 2>&1 || packages+=(npm)
 # --list: print the package names (one place defines them; .ci/run installs from it).
 if [ "${1:-}" = "--list" ]; then
   printf '%s\n' "${packages[@]}"
@@ -30,4 +35,10 @@ if [ ${#missing[@]} -gt 0 ]; then
   [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+# playwright-core, pinned by tests/browser/package-lock.json; it drives /usr/bin/chromium and never
+# downloads a browser.
+browser_dir="$(cd "$(dirname "$0")/.." && pwd)/tests/browser"
+if [ ! -f "$browser_dir/node_modules/playwright-core/package.json" ]; then
+  (cd "$browser_dir" && PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --no-audit --no-fund --loglevel=error)
 fi

@@ -149,7 +149,7 @@
     }
     fillMeta(build);
     const maxZoom = Math.max(0, Math.log2(R) - 8 + 3);
-    map = L.map('map', { crs: L.CRS.Simple, minZoom: 0, maxZoom: maxZoom, zoomSnap: 1, attributionControl: false });
+    map = L.map('map', { crs: L.CRS.Simple, minZoom: 0, maxZoom: maxZoom, zoomSnap: 0.25, zoomDelta: 0.5, attributionControl: false });
     const bounds = [[-256, 0], [0, 256]];
     tiles = L.tileLayer(tileUrl(), { tileSize: 256, noWrap: true, bounds: bounds, maxNativeZoom: maxZoom, maxZoom: maxZoom,
       keepBuffer: 1 }).addTo(map);
