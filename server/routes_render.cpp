@@ -2,7 +2,10 @@
 
 #include <xxhash.h>
 
+#include <time.h>
+
 #include <chrono>
+#include <cstdio>
 #include <fstream>
 #include <future>
 #include <sstream>
@@ -115,6 +118,7 @@ void get_render(ServiceState& state, const httplib::Request& req, httplib::Respo
   struct Rendered {
     std::optional<Result<RenderOutput>> output;
     std::string png;
+    double wall_ms = 0, cpu_ms = 0;  // on the render thread: what the request cost apart from queueing
   };
   auto budget = std::chrono::milliseconds(state.config.render_timeout_ms);
   auto deadline = std::chrono::steady_clock::now() + budget;
@@ -123,6 +127,9 @@ void get_render(ServiceState& state, const httplib::Request& req, httplib::Respo
   ServiceState* st = &state;
   bool queued = state.render_pool.try_submit([promise, held, request, deadline, st] {
     Rendered r;
+    auto wall_start = std::chrono::steady_clock::now();
+    timespec cpu_start{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &cpu_start);
     r.output = render_map_tile(*held, st->render_cache, request, deadline);
     if (r.output->ok() && !(*r.output)->timed_out) {
       auto png = encode_png((*r.output)->image);
@@ -130,6 +137,10 @@ void get_render(ServiceState& state, const httplib::Request& req, httplib::Respo
       else r.output = png.error();
       (*r.output)->image = RgbaImage();  // the PNG is what travels back
     }
+    timespec cpu_end{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &cpu_end);
+    r.cpu_ms = double(cpu_end.tv_sec - cpu_start.tv_sec) * 1e3 + double(cpu_end.tv_nsec - cpu_start.tv_nsec) / 1e6;
+    r.wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall_start).count();
     promise->set_value(std::move(r));
   });
   if (!queued) {
@@ -156,6 +167,9 @@ void get_render(ServiceState& state, const httplib::Request& req, httplib::Respo
     res.set_header("Cache-Control", "no-store");  // a picture of damage must not be kept
   }
   res.set_header("X-Shadowtiles-Source", (*r.output)->decoded_tiles ? "tiles" : "previews");
+  char timing[96];
+  std::snprintf(timing, sizeof timing, "render;dur=%.2f, cpu;dur=%.2f", r.wall_ms, r.cpu_ms);
+  res.set_header("Server-Timing", timing);
   res.status = 200;
   res.set_content(std::move(r.png), "image/png");
 }
