@@ -150,6 +150,15 @@ def make_charts(rows, builds, charts_dir):
             ax.plot(x, y, marker=MARKERS.get(m, "x"), linestyle=":", label=m)
             for r, xi, yi in zip(s, x, y):
                 ax.annotate(res_label(r["resolution"]), (xi, yi), fontsize=6, xytext=(2, 2), textcoords="offset points")
+        # The peer: Embree occlusion rays toward the sun (the ground truth itself: error 0).
+        e = [r for r in rows if r["scene"] == scene and r.get("embree_lps_point_rows_t1")]
+        seen = set()
+        for r in e:
+            if r["resolution"] in seen:
+                continue
+            seen.add(r["resolution"])
+            ax.plot([r["embree_lps_point_rows_t1"] / 1e6], [0], marker="*", color="black", linestyle="",
+                    label="Embree ray" if len(seen) == 1 else None)
         ax.set_xscale("log")
         ax.set_xlabel("point lookups/s (M, 1 thread, row order)", fontsize=8)
         ax.set_ylabel("receivers wrong (%)", fontsize=8)
@@ -338,6 +347,24 @@ def report(doc, charts, md_path, sizes=()):
                            mrate(r.get("lps_pcf3_rows_t1")), mrate(r.get("lps_pcf3_random_t1")),
                            mrate(r.get("lps_pcf5_rows_t1")), mrate(r.get("lps_pcf5_random_t1")),
                            mrate(r.get("lps_pcf5_random_t2"))] for r in srows]))
+        if any(r.get("embree_lps_point_rows_t1") for r in srows):
+            def x(v, d=2):
+                return f"{v:.{d}f}" if v else "-"
+            out += ["", "Against Embree occlusion rays (one `rtcOccluded1` toward the sun per receiver, same receivers, "
+                    "orders and threads; ×2 = 2 threads), batch = `query_batch` of the shuffled batch points (Embree: "
+                    "the same points in the batch's sort order), cold = first batch on a freshly opened store:", ""]
+            out.append(table(["res", "method", "Embree rows ×2", "rows ×2 / Embree", "rand ×2 / Embree", "batch ×2",
+                              "batch / Embree", "2t/1t rows", "2t/1t rand", "pcf3/point cost", "p50 µs", "p99 µs",
+                              "cold s", "cold read", "decoded/payload", "cache peak", "RSS MiB"],
+                             [[res_label(r["resolution"]), r["method"], mrate(r.get("embree_lps_point_rows_t2")),
+                               x(r.get("vs_embree_point_rows_t2")), x(r.get("vs_embree_point_random_t2")),
+                               mrate(r.get("lps_batch_t2")), x(r.get("vs_embree_batch_t2")),
+                               x(r.get("lps_point_rows_t2", 0) / r["lps_point_rows_t1"] if r.get("lps_point_rows_t1") else 0),
+                               x(r.get("lps_point_random_t2", 0) / r["lps_point_random_t1"] if r.get("lps_point_random_t1") else 0),
+                               x(r.get("pcf3_over_point_cost")), x(r.get("point_latency_p50_us")),
+                               x(r.get("point_latency_p99_us")), x(r.get("cold_batch_s"), 3),
+                               fmt_bytes(r.get("cold_batch_bytes_read", 0)), x(r.get("decoded_over_payload")),
+                               fmt_bytes(r.get("cache_peak_bytes", 0)), x(r.get("lookup_rss_mib"), 0)] for r in srows]))
         out += ["", "Build (all methods in one build), seconds:", ""]
         b = sorted((x for x in builds if x["scene"] == scene), key=lambda x: x["resolution"])
         out.append(table(["res", "load", "index", "BVH Σ", "rays Σ", "encode Σ", "store Σ", "wall", "rays", "peak RSS MiB"],

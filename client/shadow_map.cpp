@@ -180,7 +180,8 @@ Result<std::shared_ptr<const DecodedTile>> ShadowMap::shared_tile(const store::T
   auto pending = std::make_shared<InFlight>();
   in_flight_[key] = pending;
   lock.unlock();
-  auto decoded = fetch_tile(key);
+  size_t blob_bytes = 0;
+  auto decoded = fetch_tile(key, &blob_bytes);
   std::vector<std::shared_ptr<const DecodedTile>> evicted;  // freed after the lock is released
   lock.lock();
   in_flight_.erase(key);
@@ -192,6 +193,7 @@ Result<std::shared_ptr<const DecodedTile>> ShadowMap::shared_tile(const store::T
     return decoded.error();
   }
   const size_t bytes = *decoded ? (*decoded)->memory_bytes() : 0;
+  stats_.fetched_bytes += blob_bytes;
   lru_.push_front(key);
   cache_[key] = CacheEntry{*decoded, bytes, lru_.begin()};
   stats_.bytes += bytes;
@@ -210,11 +212,12 @@ Result<std::shared_ptr<const DecodedTile>> ShadowMap::shared_tile(const store::T
   return decoded;
 }
 
-Result<std::shared_ptr<const DecodedTile>> ShadowMap::fetch_tile(const store::TileKey& key) const {
+Result<std::shared_ptr<const DecodedTile>> ShadowMap::fetch_tile(const store::TileKey& key, size_t* blob_bytes) const {
   const store::Method method = key.method;
   auto blob = source_->tile_blob(key);
   if (!blob) return blob.error();
   if (!blob->has_value()) return std::shared_ptr<const DecodedTile>();  // empty tile
+  *blob_bytes = (*blob)->size();
   store::BlobHeader header;
   auto payload = store::decode_blob(**blob, &header);
   if (!payload)

@@ -54,6 +54,7 @@ struct CacheStats {
   uint64_t bytes = 0;
   uint64_t peak_bytes = 0;     // largest `bytes` so far
   uint64_t evictions = 0;
+  uint64_t fetched_bytes = 0;  // blob bytes read from the source (stored, compressed)
   uint64_t tiles = 0;
 };
 
@@ -159,7 +160,7 @@ class ShadowMap {
   // Through the shared cache: a cached tile, another thread's fetch in flight, or a fetch now.
   Result<std::shared_ptr<const DecodedTile>> shared_tile(const store::TileKey& key, uint64_t reported_hits) const;
   // Reads, checks and decodes one tile blob (no lock held).
-  Result<std::shared_ptr<const DecodedTile>> fetch_tile(const store::TileKey& key) const;
+  Result<std::shared_ptr<const DecodedTile>> fetch_tile(const store::TileKey& key, size_t* blob_bytes) const;
 
   // Per-query PCF over a kernel, the tiles it crosses included (method checked, point on the map).
   Result<uint64_t> pcf_lit_samples(store::Method method, int64_t cu, int64_t cv, unsigned kernel, float threshold,

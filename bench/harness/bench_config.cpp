@@ -67,7 +67,7 @@ Result<BenchConfig> parse_bench_config(const nlohmann::json& json, const std::fi
   config.source = json;
   if (Status s = check_keys(json, {"description", "scene_root", "methods", "resolutions", "tile_size", "build_threads",
                                    "receivers", "camera", "pcf_kernels", "pcf_supersample", "threads", "min_seconds",
-                                   "cache_mib", "keep_stores", "seed", "scenes"},
+                                   "cache_mib", "keep_stores", "seed", "batch_points", "scenes"},
                             "the config");
       !s)
     return s.error();
@@ -81,6 +81,7 @@ Result<BenchConfig> parse_bench_config(const nlohmann::json& json, const std::fi
                  read(json, "pcf_supersample", config.pcf_supersample), read(json, "threads", config.threads),
                  read(json, "min_seconds", config.min_seconds), read(json, "cache_mib", config.cache_mib),
                  read(json, "keep_stores", config.keep_stores), read(json, "seed", config.seed),
+                 read(json, "batch_points", config.batch_points),
                  read_methods(json, config.methods)})
     if (!s) return s.error();
   if (json.contains("camera"))

@@ -18,6 +18,7 @@
 //   cache_mib       ShadowMap tile cache budget
 //   keep_stores     keep the built stores under OUT/stores (default false: removed when measured)
 //   seed            receiver sampling seed
+//   batch_points    surface points of the query_batch rows (shuffled; 0 disables them)
 //   scenes          [{"name", "file", "up": "y"|"z", "sun": [az, el], "heightfield": ["*"],
 //                     "resolutions": [...] (overrides), "receivers": n (overrides),
 //                     "camera": {...} (overrides keys of the default camera)}]
@@ -69,6 +70,7 @@ struct BenchConfig {
   uint64_t cache_mib = 1024;
   bool keep_stores = false;
   uint64_t seed = 1;
+  uint64_t batch_points = 1000000;
   std::vector<SceneSpec> scenes;
   nlohmann::json source;  // the config as read, echoed into results.json
 };

@@ -12,6 +12,7 @@
 #include "bench/harness/lookup_rate.hpp"
 #include "bench/harness/machine_info.hpp"
 #include "bench/harness/store_sizes.hpp"
+#include "client/morton.hpp"
 #include "builder/build_job.hpp"
 #include "builder/scene_loader.hpp"
 #include "builder/tile_encoder.hpp"
@@ -54,6 +55,7 @@ struct SceneData {
   Scene scene;
   Vec3 light{};
   std::vector<Receiver> uniform, camera;
+  std::vector<Vec3> batch;  // config.batch_points surface points, shuffled
   std::vector<uint8_t> uniform_truth, camera_truth;
 };
 
@@ -78,6 +80,35 @@ Status measure_store(const BenchConfig& config, const SceneSpec& spec, uint32_t 
     pcf_truths[k] = pcf_truth(**map, truth, data.uniform, k, config.pcf_supersample, config.seed);
   spdlog::info("  ground-truth PCF: {:.1f} s", std::chrono::duration<double>(Clock::now() - t0).count());
   PointOrders orders = make_orders((*map)->frame(), data.uniform, data.camera, config.seed);
+
+  // The peer a user would pick instead: one Embree occlusion ray toward the sun per receiver, same
+  // receivers, orders and threads as the store's lookups; every rate below is divided by it.
+  Json embree;
+  auto ray = [&truth](const Vec3& p) { return truth.lit(p) ? 1.0 : 0.0; };
+  for (auto& [order, points] : {std::pair<const char*, const std::vector<Vec3>*>{"rows", &orders.rows},
+                                {"camera", &orders.camera}, {"random", &orders.random}})
+    for (unsigned threads : config.threads)
+      embree["embree_lps_point_" + std::string(order) + "_t" + std::to_string(threads)] =
+          measure_point_rate(*points, threads, config.min_seconds, ray).lookups_per_second;
+  // The batch points as query_batch orders them (tile, then Morton inside it), for the batch peer.
+  std::vector<Vec3> batch_sorted = data.batch;
+  {
+    const LightFrame& frame = (*map)->frame();
+    const double R = (*map)->layout().resolution();
+    std::vector<std::pair<uint64_t, size_t>> keyed;
+    for (size_t i = 0; i < data.batch.size(); ++i) {
+      LightSpacePoint l = frame.to_light(data.batch[i]);
+      const bool on = l.u >= 0 && l.u < R && l.v >= 0 && l.v < R;
+      keyed.push_back({on ? morton_encode(uint32_t(l.u), uint32_t(l.v)) : ~uint64_t(0), i});
+    }
+    std::sort(keyed.begin(), keyed.end());
+    for (size_t i = 0; i < keyed.size(); ++i) batch_sorted[i] = data.batch[keyed[i].second];
+  }
+  for (unsigned threads : config.threads)
+    embree["embree_lps_batch_t" + std::to_string(threads)] =
+        measure_point_rate(batch_sorted, threads, config.min_seconds, ray).lookups_per_second;
+  spdlog::info("  Embree occlusion rays: rows {:.2f} M/s, random {:.2f} M/s (1 thread)",
+               embree.value("embree_lps_point_rows_t1", 0.0) / 1e6, embree.value("embree_lps_point_random_t1", 0.0) / 1e6);
 
   std::vector<uint8_t> raw_uniform, raw_camera;
   for (store::Method method : methods) {
@@ -151,7 +182,60 @@ Status measure_store(const BenchConfig& config, const SceneSpec& spec, uint32_t 
         }
       }
     }
+    // Batch queries (query_batch) of the shuffled batch points, point and PCF 3x3.
+    for (unsigned threads : config.threads) {
+      if (data.batch.empty()) break;
+      for (unsigned k : {1u, 3u}) {
+        auto rate = measure_batch_rate(**map, method, data.batch, k, threads, config.min_seconds);
+        if (!rate) return rate.error();
+        row[std::string(k == 1 ? "lps_batch" : "lps_batch_pcf3") + "_t" + std::to_string(threads)] =
+            rate->lookups_per_second;
+        misses += rate->cache_misses;
+      }
+    }
     row["lookup_cache_misses"] = misses;
+    for (auto& [key, value] : embree.items()) row[key] = value;
+    auto ratio = [&](const std::string& a, const std::string& b) {
+      const double x = row.value(a, 0.0), y = row.contains(b) ? row[b].get<double>() : 0.0;
+      return y > 0 ? x / y : 0.0;
+    };
+    for (unsigned threads : config.threads) {
+      const std::string t = "_t" + std::to_string(threads);
+      for (const char* order : {"rows", "camera", "random"})
+        row[std::string("vs_embree_point_") + order + t] =
+            ratio(std::string("lps_point_") + order + t, std::string("embree_lps_point_") + order + t);
+      row["vs_embree_batch" + t] = ratio("lps_batch" + t, "embree_lps_batch" + t);
+    }
+    row["pcf3_over_point_cost"] = ratio("lps_point_rows_t1", "lps_pcf3_rows_t1");
+    row["batch_pcf3_over_point_cost"] = ratio("lps_batch_t1", "lps_batch_pcf3_t1");
+    // Latency of single point queries (warm, one thread, random order).
+    auto latency = measure_point_latency(**map, method, orders.random);
+    if (!latency) return latency.error();
+    row["point_latency_p50_us"] = latency->p50_us;
+    row["point_latency_p99_us"] = latency->p99_us;
+    // Memory: the cache's peak so far and the process RSS during the lookup runs.
+    row["cache_peak_bytes"] = (*map)->cache_stats().peak_bytes;
+    row["lookup_rss_mib"] = current_rss_mib();
+    // Cold start: the first batch on a freshly opened store (tiles read, checked, decoded), then
+    // every tile decoded for the decoded size.
+    if (!data.batch.empty()) {
+      auto cold = ShadowMap::open(store_dir, options);
+      if (!cold) return cold.error();
+      ShadowMap::BatchOptions batch;
+      batch.threads = config.threads.empty() ? 2 : config.threads.back();
+      ShadowMap::BatchAnswers answers;
+      const auto start = Clock::now();
+      if (Status st = (*cold)->query_batch(data.batch, method, batch, answers); !st) return st.error();
+      row["cold_batch_s"] = std::chrono::duration<double>(Clock::now() - start).count();
+      row["cold_batch_bytes_read"] = (*cold)->cache_stats().fetched_bytes;
+      std::vector<TileCoord> all;
+      for (uint32_t y = 0; y < (*cold)->layout().tiles_per_side(); ++y)
+        for (uint32_t x = 0; x < (*cold)->layout().tiles_per_side(); ++x) all.push_back({x, y});
+      if (Status st = (*cold)->prefetch(method, all); !st) return st.error();
+      const CacheStats cs = (*cold)->cache_stats();
+      row["decoded_bytes"] = cs.bytes;
+      row["decoded_over_payload"] = size.payload_bytes ? double(cs.bytes) / double(size.payload_bytes) : 0.0;
+    }
     spdlog::info("  {} {}^2 {}: {} B, error {:.3f}%, point rows {:.2f} M/s", spec.name, resolution, name,
                  size.blob_bytes, 100.0 * acc->error_rate(),
                  row.value("lps_point_rows_t1", 0.0) / 1e6);
@@ -203,6 +287,9 @@ Status run_bench(const BenchConfig& config, const std::filesystem::path& out_dir
     if (!light) return light.error();
     data.light = *light;
     data.uniform = sample_receivers(data.scene, spec.receivers, config.seed);
+    for (const Receiver& r : sample_receivers(data.scene, config.batch_points, config.seed + 1))
+      data.batch.push_back(r.position);
+    std::shuffle(data.batch.begin(), data.batch.end(), std::mt19937_64(config.seed + 2));
     data.camera = camera_receivers(*device, data.scene, spec.up, spec.camera);
     GroundTruth truth(*device, data.scene, data.light);
     data.uniform_truth = point_truth(truth, data.uniform);

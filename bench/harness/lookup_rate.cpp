@@ -1,5 +1,6 @@
 #include "bench/harness/lookup_rate.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <mutex>
@@ -73,6 +74,80 @@ Result<LookupRate> measure_lookup_rate(const ShadowMap& map, store::Method metho
   rate.cache_misses = map.cache_stats().misses - misses_before;
   if (sink < 0) std::abort();
   return rate;
+}
+
+LookupRate measure_point_rate(std::span<const Vec3> points, unsigned threads, double min_seconds,
+                              const std::function<double(const Vec3&)>& look_up) {
+  LookupRate rate;
+  if (points.empty() || threads == 0) return rate;
+  double sink = 0;
+  for (const Vec3& p : points) sink += look_up(p);
+  std::atomic<uint64_t> total{0};
+  const auto start = Clock::now();
+  const auto deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(min_seconds));
+  auto worker = [&](unsigned index) {
+    size_t i = points.size() * index / threads;
+    uint64_t count = 0;
+    double local_sink = 0;
+    do {
+      for (int j = 0; j < 64; ++j, ++count) {
+        local_sink += look_up(points[i]);
+        if (++i == points.size()) i = 0;
+      }
+    } while (Clock::now() < deadline);
+    total += count;
+    if (local_sink < 0) std::abort();
+  };
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker, t);
+  worker(0);
+  for (auto& t : pool) t.join();
+  rate.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  rate.lookups = total;
+  rate.lookups_per_second = rate.seconds > 0 ? double(rate.lookups) / rate.seconds : 0;
+  if (sink < 0) std::abort();
+  return rate;
+}
+
+Result<LookupRate> measure_batch_rate(const ShadowMap& map, store::Method method, std::span<const Vec3> points,
+                                      unsigned kernel, unsigned threads, double min_seconds) {
+  LookupRate rate;
+  if (points.empty() || threads == 0) return rate;
+  ShadowMap::BatchOptions options;
+  options.kernel = kernel;
+  options.threads = threads;
+  ShadowMap::BatchAnswers answers;
+  if (Status s = map.query_batch(points, method, options, answers); !s) return s.error();  // warm-up
+  const uint64_t misses_before = map.cache_stats().misses;
+  const auto start = Clock::now();
+  do {
+    if (Status s = map.query_batch(points, method, options, answers); !s) return s.error();
+    rate.lookups += points.size();
+    rate.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  } while (rate.seconds < min_seconds);
+  rate.lookups_per_second = double(rate.lookups) / rate.seconds;
+  rate.cache_misses = map.cache_stats().misses - misses_before;
+  return rate;
+}
+
+Result<Latency> measure_point_latency(const ShadowMap& map, store::Method method, std::span<const Vec3> points) {
+  Latency latency;
+  if (points.empty()) return latency;
+  for (const Vec3& p : points)  // warm
+    if (auto a = map.query(p, method); !a) return a.error();
+  std::vector<double> us;
+  us.reserve(points.size());
+  for (const Vec3& p : points) {
+    const auto t0 = Clock::now();
+    auto a = map.query(p, method);
+    const auto t1 = Clock::now();
+    if (!a) return a.error();
+    us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+  }
+  std::sort(us.begin(), us.end());
+  latency.p50_us = us[us.size() / 2];
+  latency.p99_us = us[std::min(us.size() - 1, us.size() * 99 / 100)];
+  return latency;
 }
 
 }  // namespace shadowtiles::bench

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <span>
 
 #include "client/shadow_map.hpp"
@@ -27,5 +28,20 @@ struct LookupRate {
 // `kernel` 1 = point query, else PCF kernel side (odd).
 Result<LookupRate> measure_lookup_rate(const ShadowMap& map, store::Method method, std::span<const Vec3> points,
                                        unsigned kernel, unsigned threads, double min_seconds);
+
+// The same loop for any per-point answer (the Embree occlusion-ray peer): `look_up` returns 0 or 1.
+LookupRate measure_point_rate(std::span<const Vec3> points, unsigned threads, double min_seconds,
+                              const std::function<double(const Vec3&)>& look_up);
+
+// ShadowMap::query_batch over all `points` at once, repeated until `min_seconds` passed (after one
+// untimed warm-up batch); rate = points answered / wall time.
+Result<LookupRate> measure_batch_rate(const ShadowMap& map, store::Method method, std::span<const Vec3> points,
+                                      unsigned kernel, unsigned threads, double min_seconds);
+
+// Latency of single point queries, one at a time on one thread (warm): p50 and p99 in microseconds.
+struct Latency {
+  double p50_us = 0, p99_us = 0;
+};
+Result<Latency> measure_point_latency(const ShadowMap& map, store::Method method, std::span<const Vec3> points);
 
 }  // namespace shadowtiles::bench

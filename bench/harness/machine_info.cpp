@@ -73,6 +73,11 @@ double peak_rss_mib() {
   return hwm.empty() ? 0.0 : std::stod(hwm) / 1024.0;
 }
 
+double current_rss_mib() {
+  std::string rss = proc_field("/proc/self/status", "VmRSS");
+  return rss.empty() ? 0.0 : std::stod(rss) / 1024.0;
+}
+
 bool reset_peak_rss() {
   std::ofstream out("/proc/self/clear_refs");
   out << "5";

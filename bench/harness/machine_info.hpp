@@ -17,6 +17,8 @@ nlohmann::json machine_info(const std::filesystem::path& repo_dir);
 // measures its own peak (Linux >= 4.0: /proc/self/clear_refs "5"). reset returns false when the
 // kernel refuses (the peak then covers the process lifetime).
 double peak_rss_mib();
+// Resident set size now (VmRSS), MiB.
+double current_rss_mib();
 bool reset_peak_rss();
 
 }  // namespace shadowtiles::bench
