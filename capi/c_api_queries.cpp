@@ -1,6 +1,10 @@
-// The C API's queries: a point, a PCF kernel, and batches of either, answered by ShadowMap.
+// The C API's queries: a point, a PCF kernel, and batches of either, answered by ShadowMap (batches
+// through ShadowMap::query_batch unless the stored values are asked for).
 #include <algorithm>
 #include <atomic>
+#include <cmath>
+#include <limits>
+#include <span>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -59,6 +63,25 @@ Status for_chunks(size_t count, uint32_t threads, Body body) {
   return {};
 }
 
+// ShadowMap::query_batch over the caller's xyz triples (Vec3 is three packed doubles). Its outside
+// list holds 32-bit indices, hence the bound.
+Status batch(const ShadowMap& map, store::Method method, const double* points, size_t count, unsigned kernel,
+             std::optional<double> bias, uint32_t threads, ShadowMap::BatchAnswers& answers) {
+  static_assert(sizeof(Vec3) == 3 * sizeof(double));
+  if (count > std::numeric_limits<uint32_t>::max())
+    return make_error(ErrorCode::invalid_input, "a batch holds at most 2^32 - 1 points; split it");
+  // Named here so the caller learns which point is bad (query_batch fails the batch as a whole).
+  for (size_t i = 0; i < 3 * count; ++i)
+    if (!std::isfinite(points[i]))
+      return make_error(ErrorCode::invalid_input, "point " + std::to_string(i / 3) + ": coordinates must be finite");
+  ShadowMap::BatchOptions options;
+  options.kernel = kernel;
+  options.bias = bias;
+  options.threads = threads;
+  return map.query_batch(std::span<const Vec3>(reinterpret_cast<const Vec3*>(points), count), method, options,
+                         answers);
+}
+
 }  // namespace
 
 extern "C" {
@@ -104,13 +127,25 @@ shadowtiles_status shadowtiles_query_batch(const shadowtiles_map* map, const cha
     if (!m) return fail(m.error());
     const ShadowMap& sm = *map->map;
     const auto b = capi::bias_of(bias);
+    if (values == nullptr) {
+      // Lit flags only: ShadowMap's batch path (points sorted by tile and Morton order, shared walks).
+      ShadowMap::BatchAnswers answers;
+      if (Status s = batch(sm, *m, points, count, 1, b, threads, answers); !s) return fail(s.error());
+      for (size_t i = 0; i < count; ++i) lit[i] = answers.lit[i] != 0;
+      if (outside_map) {
+        std::fill(outside_map, outside_map + count, uint8_t(0));
+        for (uint32_t i : answers.outside) outside_map[i] = 1;
+      }
+      return SHADOWTILES_OK;
+    }
+    // The stored values too: one full query per point (the batch path computes lit flags only).
     Status s = for_chunks(count, threads, [&](size_t begin, size_t end, const std::atomic<bool>& failed) -> Status {
       for (size_t i = begin; i < end; ++i) {
         if ((i & 1023) == 0 && failed.load(std::memory_order_relaxed)) return {};
         auto a = sm.query(point_at(points, i), *m, b);
         if (!a) return make_error(a.error().code, "point " + std::to_string(i) + ": " + a.error().message);
         lit[i] = a->lit;
-        if (values) values[i] = a->value;
+        values[i] = a->value;
         if (outside_map) outside_map[i] = a->outside_map;
       }
       return {};
@@ -130,15 +165,9 @@ shadowtiles_status shadowtiles_query_pcf_batch(const shadowtiles_map* map, const
     if (!m) return fail(m.error());
     const ShadowMap& sm = *map->map;
     const auto b = capi::bias_of(bias);
-    Status s = for_chunks(count, threads, [&](size_t begin, size_t end, const std::atomic<bool>& failed) -> Status {
-      for (size_t i = begin; i < end; ++i) {
-        if ((i & 1023) == 0 && failed.load(std::memory_order_relaxed)) return {};
-        auto f = sm.query_pcf(point_at(points, i), *m, kernel, b);
-        if (!f) return make_error(f.error().code, "point " + std::to_string(i) + ": " + f.error().message);
-        lit_fractions[i] = *f;
-      }
-      return {};
-    });
+    ShadowMap::BatchAnswers answers;
+    Status s = batch(sm, *m, points, count, kernel, b, threads, answers);
+    if (s) std::copy(answers.lit.begin(), answers.lit.end(), lit_fractions);
     if (!s) return fail(s.error());
     return SHADOWTILES_OK;
   });

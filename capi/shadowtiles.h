@@ -105,14 +105,16 @@ SHADOWTILES_API shadowtiles_status shadowtiles_query(const shadowtiles_map* map,
 SHADOWTILES_API shadowtiles_status shadowtiles_query_pcf(const shadowtiles_map* map, const char* method,
                                                          const double point[3], uint32_t kernel, double bias,
                                                          double* lit_fraction, shadowtiles_answer* answer);
-/* count points (xyz triples, 3 * count doubles). threads: 0 = one per core. Outputs of count
- * entries each; lit is required, values and outside_map may be NULL. All or nothing: on an error no
- * output is meaningful. */
+/* count points (xyz triples, 3 * count doubles, count < 2^32). threads: 0 = one per core. Outputs
+ * of count entries each; lit is required, values and outside_map may be NULL. With values NULL the
+ * batch path answers (points sorted by tile and Morton order, shared tree walks); values asks one
+ * full query per point. All or nothing: on an error no output is meaningful. */
 SHADOWTILES_API shadowtiles_status shadowtiles_query_batch(const shadowtiles_map* map, const char* method,
                                                            const double* points, size_t count, double bias,
                                                            uint32_t threads, uint8_t* lit, float* values,
                                                            uint8_t* outside_map);
-/* PCF over a batch: lit_fractions[count]. */
+/* PCF over a batch (the batch path): lit_fractions[count], each a multiple of 1/kernel^2 rounded
+ * to float precision. */
 SHADOWTILES_API shadowtiles_status shadowtiles_query_pcf_batch(const shadowtiles_map* map, const char* method,
                                                                const double* points, size_t count,
                                                                uint32_t kernel, double bias, uint32_t threads,

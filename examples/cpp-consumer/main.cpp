@@ -2,8 +2,9 @@
 // shadowtiles::client).
 //
 //   cpp-consumer LOCATION POINTS_FILE METHOD          one "lit value" line per "x y z" point
-//   cpp-consumer --bench LOCATION POINTS_BIN METHOD   times a warm pass over float64 xyz triples
-//                                                     (single thread), prints "seconds S points N lit L"
+//   cpp-consumer --bench LOCATION POINTS_BIN METHOD   times a warm pass of query() over float64 xyz
+//                                                     triples and one query_batch (one thread each):
+//                                                     "seconds S points N lit L batch_seconds B"
 #include <chrono>
 #include <cstring>
 #include <cstdio>
@@ -64,7 +65,18 @@ int main(int argc, char** argv) {
   if (bench) {
     size_t lit_count = 0;
     for (uint8_t l : lit) lit_count += l;
-    std::printf("seconds %.6f points %zu lit %zu\n", seconds, points.size(), lit_count);
+    // The batch path on the same points, one thread (tiles are warm from the passes above).
+    st::ShadowMap::BatchOptions options;
+    options.threads = 1;
+    st::ShadowMap::BatchAnswers answers;
+    const auto start = std::chrono::steady_clock::now();
+    if (st::Status s = (*map)->query_batch(points, *method, options, answers); !s) return fail("query_batch", s.error());
+    const double batch_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    size_t batch_lit = 0;
+    for (float l : answers.lit) batch_lit += l != 0;
+    if (batch_lit != lit_count) { std::cerr << "cpp-consumer: query_batch disagrees with query\n"; return 1; }
+    std::printf("seconds %.6f points %zu lit %zu batch_seconds %.6f\n", seconds, points.size(), lit_count,
+                batch_seconds);
     return 0;
   }
   for (size_t i = 0; i < points.size(); ++i) std::printf("%d %.9g\n", lit[i], double(values[i]));

@@ -7,6 +7,7 @@ copy, no per-point Python), and ctypes releases the GIL for the duration of ever
     import shadowtiles
     with shadowtiles.open("/data/store") as m:           # or "http://127.0.0.1:8080"
         lit, values = m.query(points)                     # points: (N, 3) float64
+        lit, _ = m.query(points, values=False)            # lit flags only: the sorted batch path
         fractions = m.pcf(points, 5)
         m.meta["resolution"], m.tile("mh", 0, 0)          # decoded values of a tile, (T, T) float32
         xyz = m.surface_points()                          # first-hit world points of every texel
@@ -157,16 +158,19 @@ class Map:
     def __del__(self):
         self.close()
 
-    def query(self, points, method=None, bias=None, threads=0):
-        """Lit flags (bool, N) and stored values (float32, N) of (N, 3) float64 world points."""
+    def query(self, points, method=None, bias=None, threads=0, values=True):
+        """Lit flags (bool, N) and stored values (float32, N) of (N, 3) float64 world points.
+
+        values=False skips the values (returns (lit, None)) and takes the library's batch path
+        (points sorted by tile and Morton order): the fast way to ask many points."""
         pts = _points(points)
         n = pts.shape[0]
         lit = np.empty(n, dtype=np.uint8)
-        values = np.empty(n, dtype=np.float32)
+        out = np.empty(n, dtype=np.float32) if values else None
         _check(_lib.shadowtiles_query_batch(self._h(), _method(method), _ptr(pts, ctypes.c_double), n, _bias(bias),
-                                            int(threads), _ptr(lit, ctypes.c_uint8), _ptr(values, ctypes.c_float),
-                                            None))
-        return lit.view(np.bool_), values
+                                            int(threads), _ptr(lit, ctypes.c_uint8),
+                                            _ptr(out, ctypes.c_float) if values else None, None))
+        return lit.view(np.bool_), out
 
     def query_point(self, point, method=None, bias=None):
         """One point: a dict of lit, outside_map, empty_tile, value, u, v, depth."""

@@ -85,6 +85,14 @@ try:
 except shadowtiles.Error as e:
     assert e.code == "not_found" and "no-such-store" in str(e), (e.code, str(e))
 with shadowtiles.open(tmp + "/sun") as m:
+    # The lit-only batch path (ShadowMap::query_batch: sorted, shared walks) answers as the CLI does.
+    points = np.loadtxt(tmp + "/points.txt")
+    for method in ("mh", "mmh", "dagmh"):
+        cli = np.array([row["lit"] for row in json.load(open(tmp + "/cli_%s.json" % method))])
+        lit, none = m.query(points, method, values=False)
+        assert none is None and (lit == cli).all(), (method, int((lit != cli).sum()))
+        fractions = m.pcf(points, 1, method)
+        assert (fractions == cli).all(), method
     try:
         m.query(np.zeros((2, 3)), "cpvs")
         raise SystemExit("a method the build lacks did not raise")
