@@ -7,7 +7,7 @@
 // Points outside the map are lit and flagged; absent tiles of a complete build are empty (lit).
 // Thread safety: all methods may be called concurrently. Lookups scale with threads: a lookup's
 // hot path writes nothing shared (no reference count, atomic or lock). Eviction safety is by
-// per-thread pins: each thread keeps shared_ptr pins to the tiles it used last (up to kPinSlots,
+// per-thread pins: each thread keeps shared_ptr pins to the tiles it used last (64 slots,
 // direct-mapped), reads them by raw pointer, and re-pins through the locked shared cache on a miss.
 // The cache evicts only its own reference; an evicted tile lives on until every thread that pinned
 // it notices the cache's eviction epoch changed (at its next lookup) and drops its pins, or exits.
