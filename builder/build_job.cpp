@@ -141,6 +141,19 @@ DepthInterval progress_root(std::span<const uint8_t> value) {
   return root;
 }
 
+// One line when most triangles are one-sided under the `anywhere` contract: their texels get
+// zero-width intervals, which the MH family cannot compress.
+void log_open_mesh_hint(const Scene& scene) {
+  uint64_t open = 0;
+  for (const MeshInfo& mesh : scene.meshes)
+    if (mesh.kind == MeshKind::open) open += mesh.triangle_count;
+  if (scene.triangle_count() == 0 || 2 * open <= scene.triangle_count()) return;
+  spdlog::warn("{:.0f}% of the triangles are in open meshes: under --receivers anywhere their texels have "
+               "interval width 0 (MH/MMH/DAG-MH gain little there); --receivers surfaces (receivers on the "
+               "scene's surfaces) widens them to the second surface",
+               100.0 * double(open) / double(scene.triangle_count()));
+}
+
 bool is_hierarchical(store::Method method) {
   return method == store::Method::mh || method == store::Method::mmh || method == store::Method::dagmh;
 }
@@ -173,6 +186,8 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   if (!layout) return layout.error();
   spdlog::info("light frame: {}^2 texels of {:.6g} world units, {}^2 tiles of {}^2, depth range {:.6g}",
                resolution, frame->texel_size(), layout->tiles_per_side(), layout->tile_size(), frame->depth_range());
+
+  log_open_mesh_hint(*scene);
 
   auto scene_hash = hash_file(config.scene_path);
   if (!scene_hash) return scene_hash.error();
@@ -214,6 +229,7 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   meta.config_hash = config_hash;
   meta.scene_path = config.scene_path.string();
   meta.scene_triangles = scene->triangle_count();
+  meta.up_axis = config.load.up == UpAxis::y ? "y" : "z";
   meta.heightfield_meshes = config.load.heightfield_meshes;
   meta.scene_bounds = scene->bounds;
   meta.light_direction = frame->direction();
@@ -413,6 +429,10 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   }
   double top_seconds = seconds_since(top_start);
 
+  // Ray casting wall: the dual-depth casting alone (BVH + rays, not the cap pass, encoders or store)
+  // spread over the worker threads, i.e. what the build would take if it only cast rays.
+  const double ray_casting_wall =
+      thread_count ? (totals.depth.bvh_seconds + totals.depth.ray_seconds) / double(thread_count) : 0.0;
   // Finish: meta marked complete with the stats, then one forced sync.
   BuildSummary summary;
   summary.tiles_total = layout->tile_count();
@@ -438,6 +458,7 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
       {"threads", thread_count},
       {"seconds", {{"load", load_stats.seconds}, {"index", index_seconds},
                    {"bvh_thread_sum", totals.depth.bvh_seconds}, {"rays_thread_sum", totals.depth.ray_seconds},
+                   {"caps_thread_sum", totals.depth.cap_seconds}, {"ray_casting_wall", ray_casting_wall},
                    {"encode_thread_sum", totals.encode_seconds},
                    {"preview_thread_sum", totals.preview_seconds}, {"store_thread_sum", totals.store_seconds},
                    {"render_wall", render_wall}, {"top_levels", top_seconds},
@@ -457,6 +478,9 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   if (Status s = db.write(puts); !s) return s.error();
   if (Status s = db.sync(); !s) return s.error();
   summary.stats["seconds"]["total"] = seconds_since(total_start);
+  // Build wall over ray-casting wall (issue 14's build-time figure); with the meta's own total.
+  if (ray_casting_wall > 0)
+    summary.stats["wall_over_ray_casting"] = summary.stats["seconds"]["total"].get<double>() / ray_casting_wall;
   return summary;
 }
 

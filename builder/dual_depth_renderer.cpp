@@ -228,6 +228,7 @@ void DualDepthStats::add(const DualDepthStats& other) {
   triangles += other.triangles;
   bvh_seconds += other.bvh_seconds;
   ray_seconds += other.ray_seconds;
+  cap_seconds += other.cap_seconds;
 }
 
 DualDepthRenderer::DualDepthRenderer(const EmbreeDevice& device, const LightSpaceScene& scene,
@@ -311,6 +312,8 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
     }
   }
   (void)closed_id;
+  local.ray_seconds = seconds_since(ray_start);
+  const auto cap_start = Clock::now();
   // Cap every exit by the receiver surfaces inside its texel (see receiver_surface_caps); the
   // far-plane comparison rule is measured as its authors have it, uncapped.
   const bool capped = options_.cap_exits_at_receiver_surfaces && !options_.open_exit_at_far_plane;
@@ -325,7 +328,7 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
     }
   }
   local.rays = uint64_t(size) * size;
-  local.ray_seconds = seconds_since(ray_start);
+  local.cap_seconds = seconds_since(cap_start);
   if (stats) stats->add(local);
   return intervals;
 }

@@ -38,7 +38,8 @@ struct DualDepthStats {
   uint64_t exits = 0;          // texels with upper > lower
   uint64_t triangles = 0;      // in the tile's BVH
   double bvh_seconds = 0;
-  double ray_seconds = 0;
+  double ray_seconds = 0;  // the ray casting alone (packets, counter walk)
+  double cap_seconds = 0;  // the exit-cap pass (receiver_surface_caps), when on
 
   void add(const DualDepthStats& other);
 };

@@ -13,7 +13,7 @@ namespace shadowtiles::cli {
 namespace {
 
 struct BuildFlags {
-  std::string scene, out, sun, light_dir, methods = "raw", up = "z", construction = "bottom-up";
+  std::string scene, out, sun, light_dir, methods = "dagmh", up = "z", construction = "bottom-up";
   uint32_t resolution = 0;
   double texel_size = 0;
   uint32_t tile = 4096;
@@ -84,6 +84,8 @@ int run(const BuildFlags& flags) {
     if (s.contains("seconds"))
       for (auto& [phase, seconds] : s["seconds"].items())
         std::printf("  seconds %-18s %.3f\n", phase.c_str(), seconds.get<double>());
+    if (s.contains("wall_over_ray_casting"))
+      std::printf("  build wall / ray casting wall %.2f\n", s["wall_over_ray_casting"].get<double>());
     if (s.contains("peak_memory_mib")) std::printf("  peak memory %.0f MiB\n", s["peak_memory_mib"].get<double>());
   }
   return kOk;
@@ -103,7 +105,8 @@ void add_build_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--texel-size", flags->texel_size, "World size of a texel (picks the resolution)")->excludes(res);
   cmd->add_option("--tile", flags->tile, "Tile side in texels (power of two)")->capture_default_str();
   cmd->add_option("--threads,-j", flags->threads, "Worker threads")->capture_default_str();
-  cmd->add_option("--method,-m", flags->methods, "Methods to store, comma-separated")->capture_default_str();
+  cmd->add_option("--method,-m", flags->methods, "Methods to store, comma-separated: raw, mh, mmh, dagmh, cpvs, sst (add raw for "
+                  "comparisons and diffs)")->capture_default_str();
   cmd->add_option("--heightfield", flags->heightfields, "Mesh name solid below (terrain); '*' for all")
       ->take_all();
   cmd->add_option("--bias-texels", flags->bias_texels, "Default query bias in texel widths")->capture_default_str();

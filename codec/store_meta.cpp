@@ -52,7 +52,7 @@ nlohmann::json StoreMeta::to_json() const {
       {"config_hash", config_hash},
       {"complete", complete},
       {"scene", {{"path", scene_path}, {"triangles", scene_triangles}, {"heightfield_meshes", heightfield_meshes},
-                 {"bounds_min", vec_json(scene_bounds.min)}, {"bounds_max", vec_json(scene_bounds.max)}}},
+                 {"bounds_min", vec_json(scene_bounds.min)}, {"bounds_max", vec_json(scene_bounds.max)}, {"up", up_axis}}},
       {"light", {{"direction", vec_json(light_direction)}, {"origin", vec_json(light_origin)},
                  {"extent", light_extent}, {"depth_range", light_depth_range}}},
       {"resolution", resolution},
@@ -110,6 +110,12 @@ Result<StoreMeta> StoreMeta::from_json(const nlohmann::json& json) {
   meta.scene_path = *path;
   meta.scene_triangles = *triangles;
   meta.scene_bounds = {*bmin, *bmax};
+  if (scene.contains("up")) {
+    auto up = field<std::string>(scene, "up");
+    if (!up) return up.error();
+    if (!up->empty() && *up != "z" && *up != "y") return make_error(ErrorCode::corrupt_data, "meta: scene.up must be z or y");
+    meta.up_axis = *up;
+  }
   if (scene.contains("heightfield_meshes")) {
     auto names = field<std::vector<std::string>>(scene, "heightfield_meshes");
     if (!names) return names.error();

@@ -33,6 +33,7 @@ struct StoreMeta {
   std::string scene_path;
   std::vector<std::string> heightfield_meshes;  // as given to the build (verify reloads with them)
   uint64_t scene_triangles = 0;
+  std::string up_axis;  // "z" or "y" as given to the build; empty in stores built before it was recorded
   WorldBounds scene_bounds;
 
   Vec3 light_direction{0, 0, -1};

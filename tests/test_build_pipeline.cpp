@@ -271,6 +271,29 @@ TEST(Cli, DifferentBuildIntoTheSameStoreIsRefusedUnlessOverwritten) {
   EXPECT_EQ(testing::run_command(base + " -r 512 --tile 128 --overwrite", &output), 0) << output;
 }
 
+// `shadowtiles build` without --method stores DAG-MH alone, records the up axis, the ray-casting
+// wall time apart from the caps and encoders, and says so when most triangles are in open meshes.
+TEST(Cli, DefaultBuildStoresDagmhRecordsUpAxisAndHintsAtOpenMeshes) {
+  TempDir dir;
+  std::string scene = testing::shared_scene("bunny/stanford-bunny.obj").string();
+  std::string output;
+  ASSERT_EQ(testing::run_command(testing::cli_path().string() + " build " + scene + " --up y -r 512 --tile 256 --out " +
+                                     (dir.path() / "s").string() + " --json",
+                                 &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("100% of the triangles are in open meshes"), std::string::npos) << output;
+  EXPECT_NE(output.find("--receivers surfaces"), std::string::npos) << output;
+  auto stats = nlohmann::json::parse(output.substr(output.find('{')));
+  EXPECT_GT(stats["seconds"]["ray_casting_wall"].get<double>(), 0.0);
+  EXPECT_TRUE(stats["seconds"].contains("caps_thread_sum"));
+  EXPECT_GE(stats["wall_over_ray_casting"].get<double>(), 1.0);
+  auto map = ShadowMap::open(dir.path() / "s");
+  ASSERT_TRUE(map.ok());
+  EXPECT_EQ((*map)->meta().methods, std::vector<store::Method>{store::Method::dagmh});
+  EXPECT_EQ((*map)->meta().up_axis, "y");
+}
+
 TEST(Cli, QueryPrintsLitAndGroundTruth) {
   TempDir dir;
   std::string scene = testing::shared_scene("fzk_haus/fzk_haus.obj").string();
