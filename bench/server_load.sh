@@ -4,14 +4,16 @@
 #   1. single-point GET /v1/shadow at random points of the scene's box   (wrk, Lua)
 #   2. tile GET /v1/tiles/{method}/{z}/{x}/{y} over every tile position   (wrk, Lua)
 #   3. binary POST /v1/shadow batches of 100k float32 points              (curl, 5 runs)
+#   4. /healthz and a point query on new connections while max_connections - 2 slow clients
+#      (trickled headers, stalled bodies) hold connections            (bench/slow_clients.py)
 # and prints requests/s, p50/p99 latency and points/s. The server is always killed at the end.
 # wrk and the server share the machine: on a 2-core box the figures are a lower bound.
 #
 # Usage: bench/server_load.sh [BUILD_DIR] [SCENE] [RESOLUTION] [TILE]
 #   defaults: build  ../shared/scenes/bunny/stanford-bunny.obj  2048  512
 # Env: DURATION (wrk seconds per run, default 10), CONNECTIONS (wrk connection counts to run, default
-#      "2 16": one per server thread, then more keep-alive clients than threads, which queue:
-#      httplib serves one connection per thread), THREADS (server, default 2),
+#      "2 64": one per server thread, then as many keep-alive clients as max_connections: each has
+#      its own I/O thread, query work shares the THREADS query slots), THREADS (server, default 2),
 #      METHOD (default raw), UP (scene up axis, default y).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -20,7 +22,7 @@ SCENE=${2:-../shared/scenes/bunny/stanford-bunny.obj}
 RESOLUTION=${3:-2048}
 TILE=${4:-512}
 DURATION=${DURATION:-10}
-CONNECTIONS=${CONNECTIONS:-2 16}
+CONNECTIONS=${CONNECTIONS:-2 64}
 THREADS=${THREADS:-2}
 METHOD=${METHOD:-raw}
 UP=${UP:-y}
@@ -125,4 +127,9 @@ times = sorted(float(t) for t in open(sys.argv[1]))
 print(f"{'POST /v1/shadow 100k points':<28} median {statistics.median(times) * 1e3:.1f} ms  best {times[0] * 1e3:.1f} ms"
       f"   {100000 / statistics.median(times) / 1e6:.2f} M points/s (median)")
 EOF
-curl -sf "$BASE/metrics" | grep -E '^shadowtiles_(points_answered_total|tile_cache_(hits|misses)_total) ' || true
+MAX_CONNECTIONS=$("$CLI" serve "$WORK/store" --threads "$THREADS" --print-config 2> /dev/null |
+  python3 -c 'import json, sys; print(json.load(sys.stdin)["max_connections"])')
+POINT=$(python3 -c 'import json, sys; b = json.load(open(sys.argv[1]))["shadow"]["world_bounds"]; print("/v1/shadow?x=%.9g&y=%.9g&z=%.9g" % tuple((lo + hi) / 2 for lo, hi in zip(b["min"], b["max"])))' "$WORK/meta.json")
+echo "== slow clients: $((MAX_CONNECTIONS - 2)) of max_connections $MAX_CONNECTIONS held (half trickle headers, half stall bodies)"
+python3 bench/slow_clients.py 127.0.0.1 "$PORT" $((MAX_CONNECTIONS - 2)) 50 "$POINT"
+curl -sf "$BASE/metrics" | grep -E '^shadowtiles_(points_answered_total|tile_cache_(hits|misses)_total|rejections_total)' || true

@@ -45,6 +45,20 @@ void Metrics::observe(Route route, std::string_view http_method, int status, std
   }
 }
 
+const char* Metrics::rejection_name(Rejection reason) {
+  switch (reason) {
+    case Rejection::over_max_connections: return "over_max_connections";
+    case Rejection::over_address_cap: return "over_address_cap";
+    case Rejection::header_deadline: return "header_deadline";
+    case Rejection::body_deadline: return "body_deadline";
+    case Rejection::response_deadline: return "response_deadline";
+    case Rejection::body_too_large: return "body_too_large";
+    case Rejection::batch_too_costly: return "batch_too_costly";
+    case Rejection::query_slot_wait: return "query_slot_wait";
+  }
+  return "other";
+}
+
 std::string Metrics::render(const std::optional<CacheStats>& cache) const {
   std::string out;
   char line[1024];
@@ -85,6 +99,11 @@ std::string Metrics::render(const std::optional<CacheStats>& cache) const {
        "# TYPE shadowtiles_corrupt_blobs_total counter\n"
        "shadowtiles_corrupt_blobs_total %llu\n",
        (unsigned long long)corrupt_blobs_.load(std::memory_order_relaxed));
+  out += "# HELP shadowtiles_rejections_total Connections and requests refused to protect the server, by reason.\n"
+         "# TYPE shadowtiles_rejections_total counter\n";
+  for (size_t r = 0; r < kRejectionCount; ++r)
+    emit("shadowtiles_rejections_total{reason=\"%s\"} %llu\n", rejection_name(Rejection(r)),
+         (unsigned long long)rejections_[r].load(std::memory_order_relaxed));
   if (cache) {
     emit("# HELP shadowtiles_tile_cache_hits_total Decoded tile cache hits.\n"
          "# TYPE shadowtiles_tile_cache_hits_total counter\n"

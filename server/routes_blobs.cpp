@@ -75,6 +75,8 @@ void serve_blob(ServiceState& state, const ShadowMap& map, bool versioned, const
 void get_tile(ServiceState& state, const httplib::Request& req, httplib::Response& res, bool versioned) {
   auto held = state.map();  // this request's build, even if a reload publishes another
   if (!held) return send_error(res, 503, "not_ready", "the store is not open yet");
+  auto slot = take_query_slot(state, res);
+  if (!slot) return;
   const ShadowMap& map = *held;
   const size_t first = versioned ? 2 : 1;
   if (versioned && !check_build_id(map, req.matches[1].str(), res)) return;
@@ -110,6 +112,8 @@ void get_tile(ServiceState& state, const httplib::Request& req, httplib::Respons
 void get_skiplist(ServiceState& state, const httplib::Request& req, httplib::Response& res, bool versioned) {
   auto held = state.map();
   if (!held) return send_error(res, 503, "not_ready", "the store is not open yet");
+  auto slot = take_query_slot(state, res);
+  if (!slot) return;
   const ShadowMap& map = *held;
   if (versioned && !check_build_id(map, req.matches[1].str(), res)) return;
   auto options = options_from_params(req.params, 1);

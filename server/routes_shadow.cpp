@@ -7,6 +7,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "server/admission.hpp"
 #include "server/http_response.hpp"
 #include "server/shadow_query.hpp"
 
@@ -23,6 +24,8 @@ bool require_map(const ServiceState& state, httplib::Response& res) {
 
 void get_shadow(ServiceState& state, const httplib::Request& req, httplib::Response& res) {
   if (!require_map(state, res)) return;
+  auto slot = take_query_slot(state, res);
+  if (!slot) return;
   auto held = state.map();  // this request's build, even if a reload publishes another
   const ShadowMap& map = *held;
   static constexpr std::string_view kPointParams[] = {"x", "y", "z"};
@@ -58,6 +61,10 @@ void post_json(ServiceState& state, const ShadowMap& map, const httplib::Request
       return send_error(res, 413, "too_many_points", batch.error().message);
     return send_error(res, http_error_for(batch.error()));
   }
+  if (Status admitted = admit_batch(batch->points.size(), batch->options.pcf, state.config); !admitted) {
+    state.metrics.add_rejection(Metrics::Rejection::batch_too_costly);
+    return send_error(res, 413, "batch_too_costly", admitted.error().message);
+  }
   auto query = resolve_query(map, batch->options);
   if (!query) return send_error(res, http_error_for(query.error()));
   auto result = answer_batch(map, batch->points, *query, state.pool);
@@ -80,6 +87,10 @@ void post_binary(ServiceState& state, const ShadowMap& map, const httplib::Reque
   if (req.body.size() / 12 > state.config.max_batch_points)
     return send_error(res, 413, "too_many_points",
                       "more than " + std::to_string(state.config.max_batch_points) + " points in one batch");
+  if (Status admitted = admit_batch(req.body.size() / 12, options->pcf, state.config); !admitted) {
+    state.metrics.add_rejection(Metrics::Rejection::batch_too_costly);
+    return send_error(res, 413, "batch_too_costly", admitted.error().message);
+  }
   auto points = points_from_binary({reinterpret_cast<const uint8_t*>(req.body.data()), req.body.size()});
   if (!points) return send_error(res, http_error_for(points.error()));
   auto query = resolve_query(map, *options);
@@ -106,6 +117,8 @@ void post_binary(ServiceState& state, const ShadowMap& map, const httplib::Reque
 
 void post_shadow(ServiceState& state, const httplib::Request& req, httplib::Response& res) {
   if (!require_map(state, res)) return;
+  auto slot = take_query_slot(state, res);  // parsing a large body is query work too
+  if (!slot) return;
   std::string type = media_type(req.get_header_value("Content-Type"));
   if (type == "application/json") return post_json(state, *state.map(), req, res);
   if (type == kBinaryType) return post_binary(state, *state.map(), req, res);

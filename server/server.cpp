@@ -12,8 +12,11 @@
 #include <spdlog/spdlog.h>
 
 #include "client/shadow_map.hpp"
+#include "server/admission.hpp"
 #include "server/connection_queue.hpp"
 #include "server/http_response.hpp"
+#include "server/http_service.hpp"
+#include "server/request_parsing.hpp"
 #include "server/routes_blobs.hpp"
 #include "server/routes_info.hpp"
 #include "server/routes_render.hpp"
@@ -24,8 +27,8 @@
 namespace shadowtiles::server {
 namespace {
 
-// Start of the request being served on this thread: httplib serves one connection per worker
-// thread, one request at a time, so a thread-local carries it from pre-routing to the logger.
+// Start of the request being served on this thread: each connection runs on its own I/O thread,
+// one request at a time, so a thread-local carries it from pre-routing to the logger.
 thread_local std::optional<std::chrono::steady_clock::time_point> t_request_start;
 
 const char* status_code_name(int status) {
@@ -35,6 +38,8 @@ const char* status_code_name(int status) {
     case 404: return "not_found";
     case 405: return "method_not_allowed";
     case 408: return "request_timeout";
+    case 411: return "length_required";
+    case 431: return "header_fields_too_large";
     case 413: return "payload_too_large";
     case 414: return "uri_too_long";
     case 415: return "unsupported_media_type";
@@ -42,6 +47,57 @@ const char* status_code_name(int status) {
     case 503: return "unavailable";
     default: return status < 500 ? "bad_request" : "internal";
   }
+}
+
+ConnectionPolicy connection_policy(const ServerConfig& config) {
+  ConnectionPolicy policy;
+  policy.limits.header_timeout = std::chrono::seconds(config.read_timeout_s);
+  policy.limits.body_timeout = std::chrono::seconds(config.body_timeout_s);
+  policy.limits.write_timeout = std::chrono::seconds(config.write_timeout_s);
+  policy.keep_alive_timeout = std::chrono::seconds(config.keep_alive_timeout_s);
+  policy.keep_alive_max_count = config.keep_alive_max_count;
+  policy.max_connections_per_address = config.max_connections_per_address;
+  return policy;
+}
+
+struct Refusal {
+  HttpError error;
+  Metrics::Rejection reason;
+};
+
+// Checks a request on its headers alone, before its body is read: a declared body over
+// max_body_bytes, a chunked body (not accepted: its size is unknown up front) or a binary batch over
+// the point or cost limits is refused at once. The connection is then closed (the body stays unread).
+std::optional<Refusal> refuse_before_body(const httplib::Request& req, const ServerConfig& config) {
+  const bool has_body = req.method == "POST" || req.method == "PUT" || req.method == "PATCH";
+  if (req.has_header("Transfer-Encoding") && has_body)
+    return Refusal{{411, "length_required", "send the body with a Content-Length (chunked bodies are not accepted)"},
+                   Metrics::Rejection::body_too_large};
+  if (!req.has_header("Content-Length")) return std::nullopt;
+  if (req.get_header_value_count("Content-Length") != 1)
+    return Refusal{{400, "invalid_input", "Content-Length is given more than once"}, Metrics::Rejection::body_too_large};
+  auto declared = parse_unsigned(req.get_header_value("Content-Length"), "Content-Length", UINT64_MAX);
+  if (!declared) return Refusal{{400, "invalid_input", declared.error().message}, Metrics::Rejection::body_too_large};
+  if (Status s = admit_body(*declared, config); !s)
+    return Refusal{{413, "payload_too_large", s.error().message}, Metrics::Rejection::body_too_large};
+  if (req.method == "POST" && req.path == "/v1/shadow" &&
+      media_type(req.get_header_value("Content-Type")) == "application/octet-stream") {
+    unsigned pcf = 0;
+    if (req.get_param_value_count("pcf") == 1) {
+      auto k = parse_unsigned(req.get_param_value("pcf"), "pcf", UINT32_MAX);
+      if (k) pcf = unsigned(*k);  // a bad value is the handler's 400
+    }
+    if (Status s = admit_batch(*declared / 12, pcf, config); !s)
+      return Refusal{{413, *declared / 12 > config.max_batch_points ? "too_many_points" : "batch_too_costly",
+                      s.error().message},
+                     Metrics::Rejection::batch_too_costly};
+  }
+  return std::nullopt;
+}
+
+uint64_t declared_body_bytes(const httplib::Request& req) {
+  auto declared = parse_unsigned(req.get_header_value("Content-Length"), "Content-Length", UINT64_MAX);
+  return declared ? *declared : 0;
 }
 
 }  // namespace
@@ -56,9 +112,9 @@ struct ServedBuild {
 };
 
 struct Server::Impl {
-  explicit Impl(const ServerConfig& config) : state(config) {}
+  explicit Impl(const ServerConfig& config) : state(config), http(connection_policy(config), state.metrics) {}
   ServiceState state;
-  httplib::Server http;
+  HttpService http;
   int port = 0;
   std::atomic<bool> stop_requested{false};
 
@@ -137,25 +193,35 @@ Result<std::unique_ptr<Server>> Server::bind(const ServerConfig& config) {
   if (Status s = config.validate(); !s) return s.error();
   auto impl = std::make_unique<Impl>(config);
   ServiceState& state = impl->state;
-  httplib::Server& http = impl->http;
+  HttpService& http = impl->http;
 
-  const unsigned workers = config.threads, max_connections = config.max_connections;
-  http.new_task_queue = [workers, max_connections] { return new ConnectionQueue(workers, max_connections); };
-  http.set_read_timeout(time_t(config.read_timeout_s), 0);
-  http.set_write_timeout(time_t(config.write_timeout_s), 0);
-  http.set_keep_alive_max_count(config.keep_alive_max_count);
-  http.set_keep_alive_timeout(time_t(config.keep_alive_timeout_s));
+  // Connection I/O on up to max_connections I/O threads; query work under `threads` query slots
+  // (ServiceState::slots). Deadlines are HttpService's (ConnectionStream), not httplib's per-read
+  // timeouts; the payload limit stays as a second guard.
+  const unsigned max_connections = config.max_connections;
+  http.new_task_queue = [max_connections] { return new ConnectionQueue(max_connections); };
   http.set_payload_max_length(size_t(config.max_body_bytes));
-  // httplib writes headers and body separately: with Nagle on, every keep-alive response would wait
-  // for the client's delayed ACK (~40 ms).
-  http.set_tcp_nodelay(true);
 
-  http.set_pre_routing_handler([](const httplib::Request&, httplib::Response& res) {
+  http.set_expect_100_continue_handler([&state](const httplib::Request& req, httplib::Response& res) {
+    if (auto refusal = refuse_before_body(req, state.config)) {
+      state.metrics.add_rejection(refusal->reason);
+      send_error(res, refusal->error);
+      HttpService::close_after_response();
+      return refusal->error.status;  // httplib answers it; the body is never read
+    }
+    return 100;
+  });
+  http.set_pre_routing_handler([&state](const httplib::Request& req, httplib::Response& res) {
     t_request_start = std::chrono::steady_clock::now();
-    if (!ConnectionQueue::shedding()) return httplib::Server::HandlerResponse::Unhandled;
-    res.set_header("Retry-After", "1");
-    send_error(res, 503, "overloaded", "too many connections; retry later");
-    return httplib::Server::HandlerResponse::Handled;
+    if (auto refusal = refuse_before_body(req, state.config)) {
+      state.metrics.add_rejection(refusal->reason);
+      send_error(res, refusal->error);
+      res.set_header("Connection", "close");
+      HttpService::close_after_response();
+      return httplib::Server::HandlerResponse::Handled;
+    }
+    if (ConnectionStream* stream = HttpService::current()) stream->begin_body(declared_body_bytes(req));
+    return httplib::Server::HandlerResponse::Unhandled;
   });
   http.set_post_routing_handler([&state](const httplib::Request& req, httplib::Response& res) {
     state.cors.decorate(req, res);
@@ -163,6 +229,20 @@ Result<std::unique_ptr<Server>> Server::bind(const ServerConfig& config) {
   // Errors the routes did not describe themselves (unknown path, body over the limit, malformed
   // request line) still get the JSON error shape.
   http.set_error_handler(httplib::Server::HandlerWithResponse([](const httplib::Request&, httplib::Response& res) {
+    // httplib reports a read cut short by our deadline as a malformed request (400).
+    if (ConnectionStream* stream = HttpService::current();
+        stream && (stream->expired() == ConnectionStream::Phase::headers ||
+                   stream->expired() == ConnectionStream::Phase::body)) {
+      if (stream->over_cap())
+        send_error(res, 431, "header_fields_too_large", "the request line and headers exceed 64 KiB");
+      else
+        send_error(res, 408, "request_timeout",
+                 stream->expired() == ConnectionStream::Phase::headers
+                     ? "the request headers did not arrive within read_timeout_s"
+                     : "the request body did not arrive within body_timeout_s");
+      res.set_header("Connection", "close");
+      return httplib::Server::HandlerResponse::Handled;
+    }
     if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
     std::string message = res.status == 404   ? "no such endpoint (see /v1/meta)"
                           : res.status == 413 ? "request body larger than the configured limit"
@@ -207,6 +287,7 @@ Result<std::unique_ptr<Server>> Server::bind(const ServerConfig& config) {
                         "cannot bind " + config.host + ":" + std::to_string(config.port) + " (in use or not local?)");
     impl->port = config.port;
   }
+  http.widen_listen_backlog();
   return std::unique_ptr<Server>(new Server(std::move(impl)));
 }
 

@@ -43,7 +43,11 @@ Status ServerConfig::validate() const {
       return bad("cors_origins", "each entry must be one exact origin such as \"https://example.org\"");
   if (read_timeout_s < 1 || read_timeout_s > 3600) return bad("read_timeout_s", "must be in [1, 3600]");
   if (write_timeout_s < 1 || write_timeout_s > 3600) return bad("write_timeout_s", "must be in [1, 3600]");
+  if (body_timeout_s < 1 || body_timeout_s > 3600) return bad("body_timeout_s", "must be in [1, 3600]");
   if (max_connections < threads) return bad("max_connections", "must be at least `threads`");
+  if (max_connections > 4096) return bad("max_connections", "must be at most 4096 (one I/O thread each)");
+  if (max_batch_cost < 1) return bad("max_batch_cost", "must be at least 1");
+  if (query_wait_ms < 1 || query_wait_ms > 600000) return bad("query_wait_ms", "must be in [1, 600000]");
   if (keep_alive_max_count < 1) return bad("keep_alive_max_count", "must be at least 1");
   if (keep_alive_timeout_s < 1 || keep_alive_timeout_s > 3600)
     return bad("keep_alive_timeout_s", "must be in [1, 3600]");
@@ -67,8 +71,12 @@ nlohmann::json ServerConfig::to_json() const {
           {"cache_control_max_age", cache_control_max_age},
           {"cors_origins", cors_origins},
           {"read_timeout_s", read_timeout_s},
+          {"body_timeout_s", body_timeout_s},
           {"write_timeout_s", write_timeout_s},
           {"max_connections", max_connections},
+          {"max_connections_per_address", max_connections_per_address},
+          {"max_batch_cost", max_batch_cost},
+          {"query_wait_ms", query_wait_ms},
           {"keep_alive_max_count", keep_alive_max_count},
           {"keep_alive_timeout_s", keep_alive_timeout_s},
           {"reload_poll_s", reload_poll_s},
@@ -117,7 +125,12 @@ Result<ServerConfig> ServerConfig::from_json(const nlohmann::json& json, ServerC
        }},
       {"read_timeout_s", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.read_timeout_s); }},
       {"write_timeout_s", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.write_timeout_s); }},
+      {"body_timeout_s", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.body_timeout_s); }},
       {"max_connections", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.max_connections); }},
+      {"max_connections_per_address",
+       [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.max_connections_per_address); }},
+      {"max_batch_cost", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU64, config.max_batch_cost); }},
+      {"query_wait_ms", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.query_wait_ms); }},
       {"keep_alive_max_count",
        [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.keep_alive_max_count); }},
       {"keep_alive_timeout_s",
