@@ -6,8 +6,8 @@
 //   - time to first frame from a cold cache: open + fetch + decode + lookups, from the store and,
 //     when a server URL is given, over HTTP (no disk cache).
 // Usage: bench_streaming STORE [SERVER_URL] [SCENE]   (SCENE defaults to the path the build recorded)
-// e.g.   shadowtiles serve out/haus.store --port 8080 &  build/bench/bench_streaming out/haus.store \
-//            http://127.0.0.1:8080
+// e.g.   shadowtiles serve out/haus.store --port 8080 &
+//        build/bench/bench_streaming out/haus.store http://127.0.0.1:8080
 #include <chrono>
 #include <cstdio>
 #include <set>

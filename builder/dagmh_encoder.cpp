@@ -378,7 +378,7 @@ std::vector<uint8_t> assemble(const MhHierarchy& h, unsigned treelet_height, uns
   const unsigned wo = v.offset_width;
   std::vector<uint8_t> out;
   out.reserve(F::kHeaderBytes + t.body.size() + v.offsets.size() * wo + v.chunks.size());
-  out.insert(out.end(), F::kMagic, F::kMagic + 4);
+  for (uint8_t b : F::kMagic) out.push_back(b);  // not insert(): GCC 12 -Wstringop-overflow false positive
   put_uint(out, F::kFormatVersion, 2);
   put_uint(out, 0, 2);
   put_uint(out, h.size, 4);

@@ -59,7 +59,9 @@ void expect_lossless(const SceneCase& scene, uint32_t resolution, uint32_t tile)
     EXPECT_EQ(v.wrong_answers, 0u) << store::method_name(m);
   }
   EXPECT_LE(bytes["mmh"].get<uint64_t>(), bytes["mh"].get<uint64_t>()) << "merging never grows a tile";
-  if (scene.expect_smaller_than_raw) EXPECT_LT(bytes["mh"].get<uint64_t>(), bytes["raw"].get<uint64_t>());
+  if (scene.expect_smaller_than_raw) {
+    EXPECT_LT(bytes["mh"].get<uint64_t>(), bytes["raw"].get<uint64_t>());
+  }
   std::printf("[ figures  ] %s %u^2 tiles %u: bytes raw %llu mh %llu mmh %llu dagmh %llu (mmh/mh %.3f dagmh/mmh %.3f)\n",
               scene.file, resolution, tile, (unsigned long long)bytes["raw"].get<uint64_t>(),
               (unsigned long long)bytes["mh"].get<uint64_t>(), (unsigned long long)bytes["mmh"].get<uint64_t>(),

@@ -3,6 +3,7 @@
 #include <array>
 #include <cstdio>
 #include <ctime>
+#include <fmt/format.h>
 #include <fstream>
 #include <string>
 #include <thread>
@@ -54,12 +55,13 @@ nlohmann::json machine_info(const std::filesystem::path& repo_dir) {
   std::time_t now = std::time(nullptr);
   std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
   std::string dir = quoted(repo_dir);
-  std::string commit = run("git -C " + dir + " rev-parse --short=12 HEAD 2>/dev/null");
+  // fmt and no short-literal assignment: GCC 12 reports false -Wrestrict on string operator+ and `= "."`.
+  std::string commit = run(fmt::format("git -C {} rev-parse --short=12 HEAD 2>/dev/null", dir));
   if (commit.empty()) {  // the config may live outside the work tree: try the working directory
-    dir = ".";
+    dir.assign(1, '.');
     commit = run("git rev-parse --short=12 HEAD 2>/dev/null");
   }
-  bool dirty = !run("git -C " + dir + " status --porcelain --untracked-files=no 2>/dev/null").empty();
+  bool dirty = !run(fmt::format("git -C {} status --porcelain --untracked-files=no 2>/dev/null", dir)).empty();
   return {{"nproc", std::thread::hardware_concurrency()},
           {"cpu_model", model.empty() ? "unknown" : model},
           {"memory_gib", mem_gib},
