@@ -27,7 +27,7 @@ except ImportError:  # pragma: no cover - depends on the interpreter
         os.execv("/usr/bin/python3", ["/usr/bin/python3"] + sys.argv)
     sys.exit("make_report.py needs matplotlib: apt-get install python3-matplotlib")
 
-# The papers' figures (DESIGN.md §6, §7): their scenes, not ours; printed as anchors only.
+# The papers' figures (docs/architecture.md §6, §7): their scenes, not ours; printed as anchors only.
 PAPER_SBE16B = {  # SBE16b Table 1, MB
     "Closed City": {"mh": {4096: 0.41, 16384: 2.10, 65536: 9.33, 262144: 38.43},
                     "mmh": {4096: 0.30, 16384: 1.43, 65536: 5.80, 262144: 23.73}},
@@ -235,7 +235,7 @@ def anchors(rows, sizes=()):
         for r in sorted(mh):
             lines.append([f"ours: {scene}", res_label(r), f"{mb(mh[r]):.2f}",
                           f"{mb(mmh[r]):.2f}" if r in mmh else "-", f"{mmh[r] / mh[r]:.2f}" if r in mmh else "-"])
-    parts.append("**MMH vs MH** (MB; DESIGN.md §6)\n\n" + table(["source", "res", "MH MB", "MMH MB", "MMH/MH"], lines))
+    parts.append("**MMH vs MH** (MB; docs/architecture.md §6)\n\n" + table(["source", "res", "MH MB", "MMH MB", "MMH/MH"], lines))
     lines = []
     for scene, d in PAPER_SE21.items():
         for r in sorted(d["dagmh"]):
@@ -255,7 +255,7 @@ def anchors(rows, sizes=()):
                           f"{mb(b['dagmh']):.2f}", f"{b['dagmh'] / b['mmh']:.2f}"])
     if not any(r["method"] == "dagmh" for r in rows):
         lines.append(["ours", "-", "-", "-", "not built yet", "-"])
-    parts.append("**DAG-MH vs MMH** (MB; DESIGN.md §7)\n\n" +
+    parts.append("**DAG-MH vs MMH** (MB; docs/architecture.md §7)\n\n" +
                  table(["source", "res", "DAG MB", "MMH MB", "DAG-MH MB", "DAG-MH/MMH"], lines))
     return "\n\n".join(parts)
 

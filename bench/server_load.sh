@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Load benchmark of `shadowtiles serve` on loopback (not a unit test; DESIGN.md §10, issue 5).
+# Load benchmark of `shadowtiles serve` on loopback (not a unit test; docs/architecture.md §10, issue 5).
 # Builds a store, starts the server (default 2 threads), then measures, each bounded in time:
 #   1. single-point GET /v1/shadow at random points of the scene's box   (wrk, Lua)
 #   2. tile GET /v1/tiles/{method}/{z}/{x}/{y} over every tile position   (wrk, Lua)

@@ -1,4 +1,4 @@
-// Accuracy of a stored method against ground truth (DESIGN.md §11): for receiver points on the
+// Accuracy of a stored method against ground truth (docs/architecture.md §11): for receiver points on the
 // scene's surfaces, the store's lit/shadowed answer vs an Embree occlusion ray toward the sun.
 // Thread safety: evaluate_accuracy reads its arguments only; the ShadowMap and GroundTruth it uses
 // are themselves thread-safe.

@@ -199,7 +199,7 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   store::Store::Options store_options;
   store_options.mode = store::Store::Mode::read_write;
   store_options.initial_map_size = config.initial_map_size;
-  store_options.no_sync = true;  // one forced sync at the end (DESIGN.md §9)
+  store_options.no_sync = true;  // one forced sync at the end (docs/architecture.md §9)
   auto opened = store::Store::open(config.store_path, store_options);
   if (!opened) return opened.error();
   // Never rewrite a store a server answers from (store/serving_lock.hpp); held until the build ends.

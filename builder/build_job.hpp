@@ -1,4 +1,4 @@
-// BuildJob: scene file -> store (DESIGN.md §1). Loads and indexes the scene, fits the light frame,
+// BuildJob: scene file -> store (docs/architecture.md §1). Loads and indexes the scene, fits the light frame,
 // renders each non-empty tile's dual depth with Embree on `threads` workers, encodes every requested
 // method and commits each tile (its blobs plus a progress mark) in one LMDB transaction.
 //

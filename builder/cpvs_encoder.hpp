@@ -1,4 +1,4 @@
-// CPVS encoder (DESIGN.md §8, seed 004): a tile's dual depth -> voxelized-shadow DAG payload
+// CPVS encoder (docs/architecture.md §8, seed 004): a tile's dual depth -> voxelized-shadow DAG payload
 // (format: codec/cpvs_format.hpp, docs/cpvs.md). Binary visibility over (u, v, depth step) with the
 // map's side as depth resolution: lossy by that quantisation only (see cpvs::step_bounds).
 // Errors: invalid_input for malformed intervals or a map resolution outside [tile side, 2^20].

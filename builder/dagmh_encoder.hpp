@@ -1,4 +1,4 @@
-// DAG-MH encoder (DESIGN.md §7; SE21): an MhHierarchy (MH tree or MMH; shared blocks are expanded)
+// DAG-MH encoder (docs/architecture.md §7; SE21): an MhHierarchy (MH tree or MMH; shared blocks are expanded)
 // becomes the payload of codec/dagmh_format.hpp (docs/dagmh.md), read by codec/dagmh_decoder.
 // - Topology only goes into a DAG: identical subtree shapes (node kinds, not values) share one node.
 //   Deduplication compares keys in full; the hash only buckets (options.hash_bits is a test hook).

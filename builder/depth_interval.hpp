@@ -1,6 +1,6 @@
 // The dual depth of one tile: per texel the interval [lower, upper] of normalised light-space depth
 // (0 = near plane, 1 = far plane) such that any value inside gives every receiver the same shadow
-// answer as the exact entry depth (DESIGN.md §4). Misses are [1, +inf): fully lit.
+// answer as the exact entry depth (docs/architecture.md §4). Misses are [1, +inf): fully lit.
 #pragma once
 
 #include <cstddef>

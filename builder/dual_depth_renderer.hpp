@@ -1,5 +1,5 @@
 // DualDepthRenderer: per tile, one Embree ray per texel centre along the light gives the interval
-// [lower, upper] of depths that shadow every receiver alike (DESIGN.md §4):
+// [lower, upper] of depths that shadow every receiver alike (docs/architecture.md §4):
 // - lower = first hit (entry);
 // - upper = where the ray leaves all closed meshes: closed-mesh hits are walked in depth order with
 //   a counter (+1 front-facing, -1 back-facing); where it returns to 0 is the exit. The exit is
@@ -47,7 +47,7 @@ struct DualDepthStats {
 struct DualDepthOptions {
   // Normalised depth subtracted from closed-mesh exits (see above); >= the largest query bias.
   float exit_margin = 0.0f;
-  // Comparison only, never a default (DESIGN.md §4 note): the MMH authors' rule, where a ray whose
+  // Comparison only, never a default (docs/architecture.md §4 note): the MMH authors' rule, where a ray whose
   // first hit is an open surface exits at the far plane (everything behind it counts as solid). It
   // leaks light onto receivers under open surfaces; the stability suite measures how much.
   bool open_exit_at_far_plane = false;

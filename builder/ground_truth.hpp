@@ -1,5 +1,5 @@
 // GroundTruth: exact visibility of the sun from a world point, by an Embree occlusion ray toward the
-// sun over the whole scene (DESIGN.md §11). The accuracy reference for every method.
+// sun over the whole scene (docs/architecture.md §11). The accuracy reference for every method.
 // The BVH holds the scene relative to its bounds' centre so float precision follows the scene's
 // size, not its distance from the world origin.
 // Thread safety: lit() may be called concurrently after construction.

@@ -1,4 +1,4 @@
-// Mesh classifier: is a triangle mesh closed (watertight and consistently oriented)? DESIGN.md §4.
+// Mesh classifier: is a triangle mesh closed (watertight and consistently oriented)? docs/architecture.md §4.
 //
 // Only closed meshes may contribute exit depths; everything else is one-sided. A mesh is closed when,
 // after welding vertices with bit-identical positions, every undirected edge is used by exactly two

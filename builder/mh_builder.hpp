@@ -1,4 +1,4 @@
-// MH construction for one tile (DESIGN.md §5; SBE16a): from per-texel depth intervals to an
+// MH construction for one tile (docs/architecture.md §5; SBE16a): from per-texel depth intervals to an
 // MhHierarchy whose every texel resolves to a value inside its interval.
 //
 // Bottom-up (default): one level at a time from the texels to the root, over dense Morton-order

@@ -1,5 +1,5 @@
 // Internal to the MH builders: a complete quadtree over a tile as dense per-level arrays in Morton
-// order (node p at level l has children 4p..4p+3 at level l+1, in the child order of DESIGN.md §5),
+// order (node p at level l has children 4p..4p+3 at level l+1, in the child order of docs/architecture.md §5),
 // and its conversion to the block form (MhHierarchy). Breadth-first order of a quadtree level is
 // Morton order, so compaction is one sequential pass per level.
 // Thread safety: plain functions on caller-owned data.

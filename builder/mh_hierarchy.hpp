@@ -1,4 +1,4 @@
-// MhHierarchy: the builder-side form of an MH or MMH (DESIGN.md §5, §6), between construction
+// MhHierarchy: the builder-side form of an MH or MMH (docs/architecture.md §5, §6), between construction
 // (mh_builder), merging (mmh_merger) and encoding (mh_encoder). Nodes are grouped in *blocks*: the
 // children of one node. Each node carries, instead of a value, its validity interval: any value
 // inside it keeps every texel that resolves to the node (deepest valued node on its path) exact.
@@ -51,7 +51,7 @@ Status check_structure(const MhHierarchy& h);
 // open ends (misses are [1, +inf)) use the finite end, so every stored value is finite.
 float mh_value_for(const DepthInterval& interval);
 
-// What the top levels need from a tile (DESIGN.md §5 "tiled build"): the root's validity interval.
+// What the top levels need from a tile (docs/architecture.md §5 "tiled build"): the root's validity interval.
 // The tiles' roots, with absent tiles as [1, +inf), form the texels of the top-level MH.
 struct MhTileSummary {
   DepthInterval root;

@@ -1,4 +1,4 @@
-// Top-down MH construction (SBE16a Alg. 1), kept to compare with bottom-up (DESIGN.md §5). Each
+// Top-down MH construction (SBE16a Alg. 1), kept to compare with bottom-up (docs/architecture.md §5). Each
 // node takes the depth covering the most texel intervals of its region (a sweep over sorted
 // endpoints) unless the inherited value covers as many (then it stays empty); quadrants whose
 // texels are all covered by the node's value are dropped. Validity intervals are then computed

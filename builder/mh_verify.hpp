@@ -1,5 +1,5 @@
 // Exhaustive losslessness check of a decoded MH/MMH tile against the intervals it was built from
-// (DESIGN.md §5 invariant): every texel's full-resolution lookup must lie in [lower, upper]. Used by
+// (docs/architecture.md §5 invariant): every texel's full-resolution lookup must lie in [lower, upper]. Used by
 // the tests and by `shadowtiles verify`.
 // Errors: invalid_input when sizes differ; corrupt_data when any texel is outside its interval (the
 // message gives the count and the first offender). The report, when given, is filled either way.

@@ -1,8 +1,8 @@
-// MMH merging (DESIGN.md §6; SBE16b): inside one tile, the children blocks of two nodes are shared
+// MMH merging (docs/architecture.md §6; SBE16b): inside one tile, the children blocks of two nodes are shared
 // when their subtrees have identical topology (same child codes at every node) and every pair of
 // corresponding valued nodes has intersecting validity intervals. The kept block's intervals become
 // the intersections, so its values (midpoints, chosen by the encoder) are exact for every sharer.
-// Values are absolute: there is no relative mode (unsound under merging, see DESIGN.md §6).
+// Values are absolute: there is no relative mode (unsound under merging, see docs/architecture.md §6).
 //
 // Algorithm: topology hash and height per block, bottom-up; blocks in order of decreasing height
 // (tallest first), each tested against the representatives of its (height, hash) bucket, most

@@ -1,7 +1,7 @@
 // Scene: the world as a triangle soup grouped into meshes, in world coordinates (double, so huge
 // coordinates survive until the builder moves them into tile-local light space).
 //
-// Each mesh carries its classification (DESIGN.md §4): closed meshes contribute exit depths, open
+// Each mesh carries its classification (docs/architecture.md §4): closed meshes contribute exit depths, open
 // ones are one-sided (exit = entry), heightfield meshes are solid below (exit = far plane).
 // Built by the scene loader (builder/scene_loader.hpp) or by hand in tests via add_mesh().
 // Thread safety: immutable once built; concurrent reads are safe.

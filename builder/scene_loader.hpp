@@ -1,5 +1,5 @@
 // Scene loader: reads a scene file into a Scene (builder/scene.hpp) in world coordinates, one
-// MeshInfo per mesh instance, each classified closed/open (DESIGN.md §4) or declared a heightfield.
+// MeshInfo per mesh instance, each classified closed/open (docs/architecture.md §4) or declared a heightfield.
 //
 // Formats: everything assimp 5.2 imports, chosen by file extension: OBJ, PLY (ascii and binary),
 // glTF 2.0 (.gltf, .glb), FBX, Collada (.dae), IFC, STL, OFF, 3DS, ...; Terragen (.ter) by our own reader.

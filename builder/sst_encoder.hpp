@@ -1,4 +1,4 @@
-// SST encoder (DESIGN.md §8, seed 002): a tile's dual depth -> sparse shadow tree payload
+// SST encoder (docs/architecture.md §8, seed 002): a tile's dual depth -> sparse shadow tree payload
 // (codec/sst_format.hpp, docs/sst.md).
 // Per block of min(128, size)^2 texels a quadtree; each node takes the cheapest record that keeps
 // every texel of the node inside its interval, tried in order of size: the value 1 (misses), one

@@ -1,6 +1,6 @@
 // Store verification: recompute every tile's dual-depth intervals from the scene and check that
 // every stored method's decoded value of every texel lies inside [lower, upper] — the definition of
-// lossless (DESIGN.md §5). Also checks the consequence the user cares about: a shadow test at a depth
+// lossless (docs/architecture.md §5). Also checks the consequence the user cares about: a shadow test at a depth
 // just outside the interval answers as the exact entry depth does. CPVS stores visibility, not
 // values: it is checked by its step rule instead (receivers 1.5 depth steps outside the interval get
 // the exact answer; store_verifier.cpp, docs/cpvs.md). Intervals are recomputed from the texel

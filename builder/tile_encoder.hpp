@@ -1,7 +1,7 @@
 // Tile encoders: one tile's dual-depth intervals -> the payload of every requested method (the blob
 // container, store/blob.hpp, compresses and checksums it). MH is built once and shared by the
 // methods derived from it (MMH merges it), and the tile's root interval is reported for the top
-// levels (DESIGN.md §5 "tiled build").
+// levels (docs/architecture.md §5 "tiled build").
 // Thread safety: stateless; call concurrently.
 #pragma once
 
@@ -17,7 +17,7 @@ namespace shadowtiles {
 
 struct TileEncodeOptions {
   MhConstruction construction = MhConstruction::bottom_up;
-  // Side of the whole map in texels: CPVS quantises depth to this many steps (DESIGN.md §8).
+  // Side of the whole map in texels: CPVS quantises depth to this many steps (docs/architecture.md §8).
   uint32_t map_resolution = 0;
 };
 

@@ -1,5 +1,5 @@
 // `shadowtiles dagmh-study SCENE --resolution R[,R...]`: the DAG-MH parameter study (issue #4,
-// DESIGN.md §7). For each resolution, renders one tile's dual depth at a time (the builder's
+// docs/architecture.md §7). For each resolution, renders one tile's dual depth at a time (the builder's
 // renderer), builds its MH and MMH, encodes DAG-MH for every treelet height x chunk size and times
 // random point and PCF 3x3 lookups on each; sizes and lookup counts are accumulated over the tiles,
 // so a 64K^2 map never needs more than one tile in memory. Prints total payload bytes, DAG-MH/MMH

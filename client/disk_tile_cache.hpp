@@ -1,4 +1,4 @@
-// DiskTileCache: blobs fetched from a server, kept on local disk between runs (DESIGN.md §10: tile
+// DiskTileCache: blobs fetched from a server, kept on local disk between runs (docs/architecture.md §10: tile
 // URLs are immutable per build), bounded in bytes with least-recently-used eviction.
 // Layout: <dir>/<build id>/<name>.blob holds a blob exactly as served (its ETag is its own checksum,
 // so nothing else is stored); <name>.empty marks a tile the server answered 204 (empty) for.

@@ -1,4 +1,4 @@
-// HttpTileSource: a TileSource streaming a build from `shadowtiles serve` (DESIGN.md §10), so a
+// HttpTileSource: a TileSource streaming a build from `shadowtiles serve` (docs/architecture.md §10), so a
 // ShadowMap answers queries locally from tiles fetched on demand.
 //
 // Routes used: GET /v1/build (the meta record as stored; ETag = build id), then preferably the

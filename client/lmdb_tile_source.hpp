@@ -1,4 +1,4 @@
-// LmdbTileSource: a TileSource over a local store directory opened read-only (DESIGN.md §9:
+// LmdbTileSource: a TileSource over a local store directory opened read-only (docs/architecture.md §9:
 // MDB_RDONLY | MDB_NOTLS, so any thread of a pool may read). Each call reads in its own LMDB read
 // transaction.
 // Thread safety: every member may be called concurrently.

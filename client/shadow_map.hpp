@@ -1,4 +1,4 @@
-// ShadowMap: answers "is this world point lit?" from a build (DESIGN.md §3): world point ->
+// ShadowMap: answers "is this world point lit?" from a build (docs/architecture.md §3): world point ->
 // light space (u, v, depth) -> tile -> decoded value; lit when min(depth, 1) <= value + bias (points
 // beyond the far plane answer as on it: no surface reaches depth 1, see LightFrame::fit).
 // Tiles are read from a TileSource (a local LMDB store, or a server over HTTP), checked (header,

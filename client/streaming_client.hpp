@@ -1,5 +1,5 @@
 // The streaming client's entry points: one call opens a ShadowMap over a local store or a server,
-// and prefetch helpers load the tiles a viewer is about to need (DESIGN.md §1: "client/: stream +
+// and prefetch helpers load the tiles a viewer is about to need (docs/architecture.md §1: "client/: stream +
 // cache tiles, decode on CPU, answer queries locally").
 //
 //   auto map = open_shadow_map("http://127.0.0.1:8080", {});   // or a store directory

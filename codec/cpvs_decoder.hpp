@@ -1,4 +1,4 @@
-// CPVS decoder (DESIGN.md §8, seed 004): a tile's voxelized-shadow DAG as a DecodedTile, answering
+// CPVS decoder (docs/architecture.md §8, seed 004): a tile's voxelized-shadow DAG as a DecodedTile, answering
 // visibility at (u, v, quantised depth) (lit), PCF by leaf-mask popcounts (lit_count), and as
 // value() the start depth of the column's first shadowed step (for reports only).
 // Errors: corrupt_data for a malformed payload, unsupported for another format version.

@@ -1,4 +1,4 @@
-// CPVS tile payload format (compact precomputed voxelized shadows, DESIGN.md §8, seed 004), shared
+// CPVS tile payload format (compact precomputed voxelized shadows, docs/architecture.md §8, seed 004), shared
 // by the encoder (builder/cpvs_*) and the decoder (codec/cpvs_decoder). FORMAT-DEFINING: changing
 // anything here changes stored bytes; bump kFormatVersion. Full description: docs/cpvs.md.
 //
@@ -61,7 +61,7 @@ inline constexpr unsigned ref_rank(uint16_t codes, unsigned child) {
 }
 
 // Depth steps (the cube side) for a map of side `map_resolution` cut into tiles of `tile_size`:
-// the map's side (DESIGN.md §8), at least the tile side and kMinSide, rounded up to a power of two.
+// the map's side (docs/architecture.md §8), at least the tile side and kMinSide, rounded up to a power of two.
 inline uint32_t depth_steps_for(uint32_t map_resolution, uint32_t tile_size) {
   uint32_t n = map_resolution > tile_size ? map_resolution : tile_size;
   if (n < kMinSide) n = kMinSide;

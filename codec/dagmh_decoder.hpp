@@ -1,7 +1,7 @@
 // Decoder of DAG-MH tile payloads (format: codec/dagmh_format.hpp, docs/dagmh.md): point lookups at
 // full or coarser resolution, PCF over a box inside the tile, size statistics for `inspect`.
 //
-// Traversal (DESIGN.md §7): two value indices, `count` (values before the current node in depth-first
+// Traversal (docs/architecture.md §7): two value indices, `count` (values before the current node in depth-first
 // order) and `last` (the deepest value seen on the path); a missing child returns `last`. Treelets are
 // checked finest level first; the value index is `count` plus the set bits before the found node.
 //

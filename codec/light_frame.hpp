@@ -1,4 +1,4 @@
-// LightFrame: the orthographic light space of a directional light (DESIGN.md §3).
+// LightFrame: the orthographic light space of a directional light (docs/architecture.md §3).
 //
 // World point p maps to continuous texel coordinates (u, v) over an R x R map and a normalised depth
 // d in [0, 1] along the light direction; texel (i, j) covers u in [i, i+1), v in [j, j+1) and its ray

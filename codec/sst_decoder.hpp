@@ -1,4 +1,4 @@
-// SST decoder (DESIGN.md §8, seed 002): a tile's sparse shadow tree forest of plane-fit quadtrees
+// SST decoder (docs/architecture.md §8, seed 002): a tile's sparse shadow tree forest of plane-fit quadtrees
 // (codec/sst_format.hpp) as a DecodedTile: owns the payload, reads it through SstTileView.
 #pragma once
 

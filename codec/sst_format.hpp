@@ -1,4 +1,4 @@
-// SST (sparse shadow tree, DESIGN.md §8, seed 002) tile payload format, shared by the encoder
+// SST (sparse shadow tree, docs/architecture.md §8, seed 002) tile payload format, shared by the encoder
 // (builder/sst_encoder) and the decoder (codec/sst_tile_view). FORMAT-DEFINING: changing anything
 // here changes stored bytes; bump kFormatVersion. Full description: docs/sst.md.
 //

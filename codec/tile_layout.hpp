@@ -1,4 +1,4 @@
-// TileLayout: how an R x R shadow map is cut into T x T tiles (DESIGN.md §3).
+// TileLayout: how an R x R shadow map is cut into T x T tiles (docs/architecture.md §3).
 // Tiles are addressed (x, y) on the grid of the tile level L = log2(R / T) (2^L tiles per side), the
 // same scheme the HTTP tile URLs use. Thread safety: immutable value type.
 #pragma once

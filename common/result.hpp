@@ -1,4 +1,4 @@
-// Result<T>: the error style of every library layer (DESIGN.md §13). A function that can fail on
+// Result<T>: the error style of every library layer (docs/architecture.md §13). A function that can fail on
 // input or I/O returns Result<T>: either a value or an Error with a code and a human message.
 // The CLI maps codes to exit codes, the server to HTTP statuses. Invariants use assert instead.
 // Thread safety: plain value types.

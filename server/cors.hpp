@@ -1,4 +1,4 @@
-// CorsPolicy: cross-origin access from an explicit allow-list of origins (DESIGN.md §10), off when
+// CorsPolicy: cross-origin access from an explicit allow-list of origins (docs/architecture.md §10), off when
 // the list is empty. An allowed Origin is echoed in Access-Control-Allow-Origin (never "*", so the
 // list is the whole policy) and every response then carries "Vary: Origin" so shared caches keep
 // per-origin copies apart. Preflight (OPTIONS with Access-Control-Request-Method) from an allowed

@@ -1,5 +1,5 @@
 // Small helpers every route uses to answer: JSON bodies, JSON errors {"error": ..., "code": ...},
-// and the mapping from library errors (common/result.hpp) to HTTP statuses (DESIGN.md §13: the server
+// and the mapping from library errors (common/result.hpp) to HTTP statuses (docs/architecture.md §13: the server
 // maps error codes to HTTP statuses). Client mistakes are 4xx; only failures of the store itself
 // (a corrupt blob, an I/O error) are 5xx.
 // Thread safety: stateless functions. The messages placed in responses never echo unbounded client

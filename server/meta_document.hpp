@@ -1,7 +1,7 @@
 // The GET /v1/meta document: TileJSON 3.0.0-like fields (tilejson, tiles URL template, bounds,
 // scheme "xyz", minzoom = maxzoom = the tile level) plus a namespaced "shadow" object with what a
 // client needs to query or decode tiles itself: the light frame, resolution, tile size, levels,
-// methods, format version and build stats (DESIGN.md §10).
+// methods, format version and build stats (docs/architecture.md §10).
 // "bounds" are in light-space texel units, [0, 0, R, R] (the grid the tile URLs address); the world
 // bounds of the scene are in shadow.world_bounds. The scene's file path is reduced to its file name
 // so the document does not reveal the server's directory layout.

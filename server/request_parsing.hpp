@@ -1,4 +1,4 @@
-// Request parsing for the shadow query API (DESIGN.md §10): query-string parameters, JSON batch
+// Request parsing for the shadow query API (docs/architecture.md §10): query-string parameters, JSON batch
 // bodies and binary batch bodies (little-endian float32 x, y, z triples) → points and options.
 // Independent of the HTTP library so it can be tested on its own.
 //

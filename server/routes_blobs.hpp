@@ -1,4 +1,4 @@
-// Routes serving stored records unchanged (DESIGN.md §9, §10):
+// Routes serving stored records unchanged (docs/architecture.md §9, §10):
 //   GET|HEAD /v1/tiles/{method}/{level}/{x}/{y}   a tile blob of the `tiles` database
 //   GET|HEAD /v1/skiplist[?method=]               the method's top tree (tile roots + embedded skip
 //                                                 list), `top` key "top/<method>"

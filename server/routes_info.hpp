@@ -1,4 +1,4 @@
-// Service routes (DESIGN.md §10):
+// Service routes (docs/architecture.md §10):
 //   GET /v1/meta   the TileJSON-like metadata document (meta_document.hpp); 503 until attached
 //   GET /healthz   200 {"status": "ok"} once the store is open and its meta validated, else 503
 //   GET /metrics   Prometheus text (metrics.hpp)

@@ -1,4 +1,4 @@
-// Routes of the query API (DESIGN.md §10):
+// Routes of the query API (docs/architecture.md §10):
 //   GET  /v1/shadow?x=&y=&z=[&pcf=k][&level=][&method=][&bias=]
 //        → {"lit": 0..1, "shadowed", "outside_map", "empty_tile", "u", "v", "depth", "method", "pcf"}
 //   POST /v1/shadow, Content-Type application/json: {"points": [[x, y, z], ...], "pcf", "method",

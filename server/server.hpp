@@ -1,4 +1,4 @@
-// Server: the shadowtiles HTTP service (DESIGN.md §10, API in config/README.md) on cpp-httplib.
+// Server: the shadowtiles HTTP service (docs/architecture.md §10, API in config/README.md) on cpp-httplib.
 //
 // Lifecycle: bind() validates the config and binds the listening socket (port 0 → an ephemeral
 // port, see port()); attach_store() opens the store read-only through ShadowMap (tile cache sized by
@@ -6,7 +6,7 @@
 // `threads` workers until stop(), then finishes every accepted connection (in-flight requests
 // drain) and returns. The store can be attached while run() is already serving.
 //
-// Swapping builds (DESIGN.md §9): the server holds a shared serving lock on the directory it serves
+// Swapping builds (docs/architecture.md §9): the server holds a shared serving lock on the directory it serves
 // (store/serving_lock.hpp), so `shadowtiles build` refuses to rewrite it; a new build goes into a
 // new directory. reload() — called on SIGHUP and every `reload_poll_s` seconds — resolves the store
 // path again (a symlink repointed with `ln -sfn`), opens and validates the new build, then publishes

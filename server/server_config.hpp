@@ -1,4 +1,4 @@
-// ServerConfig: everything `shadowtiles serve` can be told (DESIGN.md §10), read from a JSON file
+// ServerConfig: everything `shadowtiles serve` can be told (docs/architecture.md §10), read from a JSON file
 // (config/serve.json, documented in config/README.md) and overridden by CLI flags.
 //
 // Parsing is strict so a typo never silently falls back to a default: an unknown key, a value of the

@@ -1,7 +1,7 @@
 // ServiceState: what every route handler shares: the effective config, CORS policy, metrics, the
 // batch pool, the query slots and the build being served. The build is published after the server may already be
-// listening: until then map() is null and the API answers 503 (DESIGN.md §10, /healthz). A reload
-// publishes a new build (DESIGN.md §9 "swapping to a new build"): a handler takes map() once and
+// listening: until then map() is null and the API answers 503 (docs/architecture.md §10, /healthz). A reload
+// publishes a new build (docs/architecture.md §9 "swapping to a new build"): a handler takes map() once and
 // keeps that shared_ptr for the whole request, so requests in flight finish on the build they
 // started with, which is closed when the last of them drops it.
 // Thread safety: config/cors are immutable; metrics and pool are thread-safe; map()/publish() are

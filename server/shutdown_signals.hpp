@@ -1,5 +1,5 @@
-// ShutdownSignals: turns SIGTERM / SIGINT into a clean stop (DESIGN.md §10: drain, exit 0), and
-// SIGHUP into a reload (DESIGN.md §9: swap to a new build) when `on_reload` is given.
+// ShutdownSignals: turns SIGTERM / SIGINT into a clean stop (docs/architecture.md §10: drain, exit 0), and
+// SIGHUP into a reload (docs/architecture.md §9: swap to a new build) when `on_reload` is given.
 // Construct it before any other thread starts: it blocks both signals in the calling thread, so
 // every thread created afterwards inherits the mask, and one watcher thread receives them with
 // sigtimedwait and calls `on_signal` (from that ordinary thread, so on_signal may lock, log and call

@@ -1,4 +1,4 @@
-// The blob container (DESIGN.md §9): how every tile and top-level payload is stored and served.
+// The blob container (docs/architecture.md §9): how every tile and top-level payload is stored and served.
 // FORMAT-defining layout, a fixed 32-byte little-endian header followed by a zstd frame:
 //   offset  0  magic "STB1"            4 bytes
 //   offset  4  format_version          u16   (kBlobFormatVersion)

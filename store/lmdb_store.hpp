@@ -1,4 +1,4 @@
-// Store: one LMDB environment (a directory) holding one build (DESIGN.md §9). Keys and values are
+// Store: one LMDB environment (a directory) holding one build (docs/architecture.md §9). Keys and values are
 // plain bytes; tile keys come from tile_key.hpp and values are usually blobs (blob.hpp), but this
 // layer knows neither trees nor blob contents.
 //

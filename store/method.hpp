@@ -1,4 +1,4 @@
-// Tile encoding methods (DESIGN.md §5–§8): the byte that names how a tile's payload is encoded.
+// Tile encoding methods (docs/architecture.md §5–§8): the byte that names how a tile's payload is encoded.
 // It appears in tile keys, blob headers and URLs (/v1/tiles/{method}/...), so values and names are
 // FORMAT constants: never renumber or rename one, only append.
 // Errors: parse functions return invalid_input for unknown or malformed names.

@@ -1,4 +1,4 @@
-// ServingLock: keeps a builder from rewriting a store that a server is answering from (DESIGN.md §9:
+// ServingLock: keeps a builder from rewriting a store that a server is answering from (docs/architecture.md §9:
 // a new build goes into a new directory, and the server swaps to it). A server holds a shared lock
 // on `<store>/serving.lock` for as long as it serves the store; a build takes the exclusive lock for
 // as long as it writes. Either side fails fast (no waiting) when the other holds it. flock(2) locks

@@ -1,4 +1,4 @@
-// Tile keys of the `tiles` database (DESIGN.md §9): 10 bytes, FORMAT-defining layout
+// Tile keys of the `tiles` database (docs/architecture.md §9): 10 bytes, FORMAT-defining layout
 //   method u8 | level u8 | x u32 big-endian | y u32 big-endian
 // Big-endian fixed width makes memcmp (LMDB's key order) equal numeric (method, level, x, y) order,
 // so one method and level form a contiguous key range (see tile_key_prefix).

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The layering check passes on the tree and fails on a copy with a planted bad include (codec -> client).
+# The layering check passes on the tree and fails on a copy with a planted bad include (codec -> client);
+# likewise the check that nothing cites a path outside the repository.
 set -euo pipefail
 src="$1"
 bash "$src/scripts/check_layering.sh" "$src"
@@ -11,3 +12,12 @@ if out=$(bash "$src/scripts/check_layering.sh" "$tmp" 2>&1); then
 fi
 grep -q 'codec/decoded_tile.cpp (codec) includes client/' <<<"$out" || { echo "FAIL: wrong message: $out"; exit 1; }
 echo "planted include caught: $out"
+
+# No path outside the repository is cited: passes on the tree, fails on a planted citation.
+bash "$src/scripts/check_no_outside_refs.sh" "$src"
+echo '// see ../shared/DESIGN.md' >> "$tmp/codec/decoded_tile.cpp"
+if out=$(bash "$src/scripts/check_no_outside_refs.sh" "$tmp" 2>&1); then
+  echo "FAIL: the planted citation of ../shared/DESIGN.md was not caught"; exit 1
+fi
+grep -q 'codec/decoded_tile.cpp:.*DESIGN.md' <<<"$out" || { echo "FAIL: wrong message: $out"; exit 1; }
+echo "planted outside citation caught: $out"

@@ -52,7 +52,7 @@ uint64_t violations(const TileIntervals& tile, const DagMhTileView& view) {
   return bad;
 }
 
-// Reference bottom-up node intervals per level (DESIGN.md §5), independent of the builder.
+// Reference bottom-up node intervals per level (docs/architecture.md §5), independent of the builder.
 std::vector<std::vector<DepthInterval>> reference_intervals(const TileIntervals& tile) {
   unsigned L = 0;
   while ((1u << L) < tile.size) ++L;

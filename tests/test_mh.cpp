@@ -41,7 +41,7 @@ Encoded encode_and_parse(const TileIntervals& tile, MhConstruction construction,
 }
 
 // Reference bottom-up intervals of every node (dense, row-major per level), written independently
-// of the builder from the rule in DESIGN.md §5.
+// of the builder from the rule in docs/architecture.md §5.
 std::vector<std::vector<DepthInterval>> reference_intervals(const TileIntervals& tile) {
   unsigned L = 0;
   while ((1u << L) < tile.size) ++L;

@@ -1002,7 +1002,7 @@ TEST(ServeCommand, StoreKeyOfTheConfig) {
 }
 
 
-// Swapping builds (DESIGN.md §9): the server follows the store path (a symlink repointed
+// Swapping builds (docs/architecture.md §9): the server follows the store path (a symlink repointed
 // atomically), publishes the new build without a restart, keeps builders out of the directory it
 // serves, and keeps serving the current build when the path holds no complete build.
 TEST(ServerReload, SwapsToTheBuildTheStorePathPointsAt) {

@@ -1,4 +1,4 @@
-// Accuracy against ground truth (DESIGN.md §11), computed so every method of a run is judged on
+// Accuracy against ground truth (docs/architecture.md §11), computed so every method of a run is judged on
 // the same receivers with the same truth:
 // - point: the store's lit/shadowed answer vs an Embree occlusion ray from the receiver toward the
 //   sun (GroundTruth, one epsilon for every method); split into false-lit (light leaks) and

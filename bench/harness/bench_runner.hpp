@@ -1,4 +1,4 @@
-// BenchRunner: the speed-vs-accuracy benchmark behind `shadowtiles bench` (DESIGN.md §11, issue 6).
+// BenchRunner: the speed-vs-accuracy benchmark behind `shadowtiles bench` (docs/architecture.md §11, issue 6).
 // For each scene x resolution of a BenchConfig it runs ONE build with every requested method the
 // builder supports (so sizes and build phases compare within one run; unsupported methods are
 // skipped with a note), then per method measures sizes, accuracy against Embree ground truth and
