@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Fails when a tracked file cites a path outside the repository (docs/architecture.md, top): the
-# project's design lives in docs/, so no code or doc may point at ../shared/DESIGN.md or the like.
+# project's design lives in docs/, so no code or doc may point at the shared design notes outside the repo.
 # Allowed: ../shared/scenes, the shared test scenes' documented location beside the checkout.
 # Usage: scripts/check_no_outside_refs.sh [ROOT] (default: the repo; a plain folder works too).
 set -euo pipefail
