@@ -6,6 +6,7 @@
 # mmh and dagmh, from the store and (C, Python) from `shadowtiles serve` on loopback. Then runs the Python terrain example (PNG) and checks Python errors carry the
 # library's message.   Usage: consumers_test.sh SOURCE_DIR BUILD_DIR
 set -euo pipefail
+trap 'echo "$(basename "$0"): failed at line $LINENO: $BASH_COMMAND" >&2' ERR
 src=$1 build=$2
 py=/usr/bin/python3  # Debian's interpreter with python3-numpy and python3-matplotlib
 cli=$build/cli/shadowtiles
@@ -13,7 +14,7 @@ scene=$src/../shared/scenes/terragen/RealisticTerrain.ply
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 prefix=$tmp/prefix
-if dpkg-query -W -f='${Status}' shadowtiles 2>/dev/null | grep -q "install ok installed"; then
+if [[ "$(dpkg-query -W -f='${Status}' shadowtiles 2>/dev/null || true)" == *"install ok installed"* ]]; then
   echo "FAIL: the shadowtiles package is installed in /usr: the consumers could use it instead of the prefix"; exit 1
 fi
 
@@ -28,7 +29,8 @@ for lib in "$libdir"/libshadowtiles.so.1 "$libdir"/libshadowtiles_client.so.0.1;
   [ -e "$lib" ] || { echo "missing $lib"; exit 1; }
   if ldd "$lib" | grep -Ei 'embree|assimp'; then echo "FAIL: $lib links the builder's dependencies"; exit 1; fi
 done
-objdump -p "$libdir/libshadowtiles.so.1" | grep -q 'SONAME *libshadowtiles.so.1$'
+dynamic_section=$(objdump -p "$libdir/libshadowtiles.so.1")  # captured: grep -q on a pipe races SIGPIPE under pipefail
+grep -q 'SONAME *libshadowtiles.so.1$' <<<"$dynamic_section"
 exported=$(nm -D --defined-only "$libdir/libshadowtiles.so.1" | awk '$2 == "T" {print $3}' | grep -cv '^shadowtiles_' || true)
 [ "$exported" -eq 0 ] || { echo "FAIL: libshadowtiles.so.1 exports $exported non-API functions"; exit 1; }
 [ -f "$prefix/include/shadowtiles.h" ] && [ -f "$prefix/include/shadowtiles/client/shadow_map.hpp" ]
