@@ -16,18 +16,17 @@
 #include <spdlog/spdlog.h>
 
 #include "builder/builder_version.hpp"
-#include "builder/dagmh_encoder.hpp"
 #include "builder/dual_depth_renderer.hpp"
 #include "builder/file_hash.hpp"
 #include "builder/light_space_scene.hpp"
-#include "builder/mh_encoder.hpp"
-#include "builder/mmh_merger.hpp"
 #include "builder/tile_encoder.hpp"
 #include "builder/tile_preview_builder.hpp"
+#include "builder/top_levels.hpp"
 #include "codec/store_meta.hpp"
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
 #include "store/serving_lock.hpp"
+#include "store/tile_info.hpp"
 #include "store/tile_key.hpp"
 #include "store/tile_preview.hpp"
 
@@ -154,10 +153,6 @@ void log_open_mesh_hint(const Scene& scene) {
                100.0 * double(open) / double(scene.triangle_count()));
 }
 
-bool is_hierarchical(store::Method method) {
-  return method == store::Method::mh || method == store::Method::mmh || method == store::Method::dagmh;
-}
-
 }  // namespace
 
 Result<BuildSummary> run_build(const BuildConfig& config) {
@@ -219,7 +214,8 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
                               " holds a different build; pass --overwrite or choose another --out");
       spdlog::warn("overwriting the build in {}", config.store_path.string());
       for (auto which : {store::Database::meta, store::Database::tiles, store::Database::top,
-                         store::Database::progress, store::Database::preview})
+                         store::Database::progress, store::Database::preview,
+                         store::Database::tileinfo})
         if (Status s = db.clear(which); !s) return s.error();
     }
   }
@@ -328,6 +324,10 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
           mine.raw_bytes_by_method[name] += encoded.payload.size();
           mine.reference_bytes_by_method[name] += encoded.reference_bytes;
           auto key = store::encode_tile_key({encoded.method, layout->tile_level(), tile.x, tile.y});
+          // The tile's info record goes with its blob (same transaction, same key).
+          store::TileInfo info{encoding->has_root, root.lower, root.upper, blob.size(), encoded.payload.size()};
+          auto info_bytes = store::encode_tile_info(info);
+          puts.push_back({store::Database::tileinfo, {key.begin(), key.end()}, {info_bytes.begin(), info_bytes.end()}});
           puts.push_back({store::Database::tiles, {key.begin(), key.end()}, std::move(blob)});
           // The inspector's preview of this tile, committed with it (store/tile_preview.hpp).
           auto preview_start = Clock::now();
@@ -396,33 +396,15 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   auto top_start = Clock::now();
   nlohmann::json top_bytes = nlohmann::json::object();
   {
-    TileIntervals grid;
-    grid.size = layout->tiles_per_side();
-    grid.texels.assign(size_t(grid.size) * grid.size, DepthInterval{});
-    for (const auto& [tile, root] : roots) grid.at(tile.x, tile.y) = root;
+    std::vector<DepthInterval> grid(size_t(layout->tiles_per_side()) * layout->tiles_per_side());
+    for (const auto& [tile, root] : roots) grid[size_t(tile.y) * layout->tiles_per_side() + tile.x] = root;
+    auto tops = encode_top_levels(config.methods, layout->tiles_per_side(), std::move(grid), layout->tile_level(),
+                                  config.zstd_level);
+    if (!tops) return tops.error();
     std::vector<store::Store::Put> puts;
-    for (store::Method method : config.methods) {
-      if (!is_hierarchical(method)) continue;
-      auto top = build_mh(grid);
-      if (!top) return top.error();
-      if (method == store::Method::mmh) {
-        auto merged = merge_mmh(*top);
-        if (!merged) return merged.error();
-        top = std::move(merged);
-      }
-      Result<std::vector<uint8_t>> payload = std::vector<uint8_t>{};
-      if (method == store::Method::dagmh) {
-        payload = encode_dagmh(*top);  // its own skip list (DagMhOptions defaults, as the tiles)
-      } else {
-        MhEncodeOptions top_options;
-        top_options.embed_skip_list = true;
-        top_options.skip_level = std::min<unsigned>(6, layout->tile_level());
-        payload = encode_mh(*top, top_options);
-      }
-      if (!payload) return payload.error();
-      auto blob = store::encode_blob(method, *payload, 0, config.zstd_level);
-      top_bytes[store::method_name(method)] = blob.size();
-      puts.push_back({store::Database::top, bytes_of(top_tree_key(method)), std::move(blob)});
+    for (TopLevelBlob& top : *tops) {
+      top_bytes[store::method_name(top.method)] = top.blob.size();
+      puts.push_back({store::Database::top, bytes_of(top_tree_key(top.method)), std::move(top.blob)});
     }
     if (!puts.empty())
       if (Status s = db.write(puts); !s) return s.error();

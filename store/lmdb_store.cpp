@@ -18,7 +18,7 @@ namespace {
 constexpr unsigned kMaxDbs = 8;                 // room for databases added later
 constexpr int kMaxMapResizedRetries = 8;        // another process may keep growing the map
 constexpr std::array<Database, kDatabaseCount> kAllDatabases = {
-    Database::meta, Database::tiles, Database::top, Database::progress, Database::preview};
+    Database::meta, Database::tiles, Database::top, Database::progress, Database::preview, Database::tileinfo};
 
 size_t index_of(Database db) { return static_cast<size_t>(db); }
 
@@ -131,6 +131,7 @@ const char* database_name(Database db) {
     case Database::top: return "top";
     case Database::progress: return "progress";
     case Database::preview: return "preview";
+    case Database::tileinfo: return "tileinfo";
   }
   assert(false && "database_name: not a Database enumerator");
   return "unknown";
@@ -384,6 +385,33 @@ Status Store::write(std::span<const Put> puts, std::span<const Delete> deletes) 
   });
 }
 
+Status Store::append(std::span<const Put> puts) {
+  for (const Put& put : puts) {
+    if (put.key.empty() || put.key.size() > max_key_size_) {
+      return make_error(ErrorCode::invalid_input,
+                        "store " + path_.string() + ": key of " + std::to_string(put.key.size()) +
+                            " bytes (allowed 1.." + std::to_string(max_key_size_) + ")");
+    }
+  }
+  if (puts.empty() && mode_ == Mode::read_write) return Status::success();
+  bool out_of_order = false;
+  Status status = run_write("append", [&](MDB_txn* txn) {
+    for (const Put& put : puts) {
+      MDB_val k = to_val(put.key);
+      MDB_val v = to_val(put.value);
+      const int rc = mdb_put(txn, dbis_[index_of(put.db)], &k, &v, MDB_APPEND);
+      out_of_order = rc == MDB_KEYEXIST;  // LMDB's answer to an append below the last key
+      if (rc != MDB_SUCCESS) return rc;
+    }
+    return MDB_SUCCESS;
+  });
+  if (!status && out_of_order) {
+    return make_error(ErrorCode::invalid_input,
+                      "store " + path_.string() + ": append with a key not above the database's last key");
+  }
+  return status;
+}
+
 Status Store::clear(Database db) {
   return run_write("clear", [&](MDB_txn* txn) { return mdb_drop(txn, dbis_[index_of(db)], 0); });
 }
@@ -444,6 +472,59 @@ Status Store::for_each(Database db, std::span<const uint8_t> prefix, const Visit
   }
   end_read(*txn);
   return status;
+}
+
+Status Store::for_each_after(Database db, std::span<const uint8_t> after, const Visitor& visit) const {
+  const size_t i = index_of(db);
+  if (!dbi_open_[i]) return Status::success();
+  Result<MDB_txn*> txn = begin_read();
+  if (!txn) return txn.error();
+  MDB_cursor* cursor = nullptr;
+  int rc = mdb_cursor_open(*txn, dbis_[i], &cursor);
+  if (rc != MDB_SUCCESS) {
+    end_read(*txn);
+    return lmdb_error("mdb_cursor_open", rc);
+  }
+  MDB_val k = to_val(after);
+  MDB_val v{};
+  rc = after.empty() ? mdb_cursor_get(cursor, &k, &v, MDB_FIRST) : mdb_cursor_get(cursor, &k, &v, MDB_SET_RANGE);
+  if (rc == MDB_SUCCESS && !after.empty() && from_val(k).size() == after.size() &&
+      std::memcmp(k.mv_data, after.data(), after.size()) == 0) {
+    rc = mdb_cursor_get(cursor, &k, &v, MDB_NEXT);
+  }
+  try {
+    while (rc == MDB_SUCCESS) {
+      if (!visit(from_val(k), from_val(v))) { rc = MDB_NOTFOUND; break; }
+      rc = mdb_cursor_get(cursor, &k, &v, MDB_NEXT);
+    }
+  } catch (...) {
+    mdb_cursor_close(cursor);
+    end_read(*txn);
+    throw;
+  }
+  mdb_cursor_close(cursor);
+  end_read(*txn);
+  if (rc == MDB_NOTFOUND) return Status::success();
+  return lmdb_error("cursor", rc);
+}
+
+Result<std::optional<std::vector<uint8_t>>> Store::last_key(Database db) const {
+  const size_t i = index_of(db);
+  if (!dbi_open_[i]) return std::optional<std::vector<uint8_t>>{};
+  Result<MDB_txn*> txn = begin_read();
+  if (!txn) return txn.error();
+  MDB_cursor* cursor = nullptr;
+  int rc = mdb_cursor_open(*txn, dbis_[i], &cursor);
+  std::optional<std::vector<uint8_t>> last;
+  if (rc == MDB_SUCCESS) {
+    MDB_val k{}, v{};
+    rc = mdb_cursor_get(cursor, &k, &v, MDB_LAST);
+    if (rc == MDB_SUCCESS) last = std::vector<uint8_t>(from_val(k).begin(), from_val(k).end());
+    mdb_cursor_close(cursor);
+  }
+  end_read(*txn);
+  if (rc != MDB_SUCCESS && rc != MDB_NOTFOUND) return lmdb_error("mdb_cursor_get last", rc);
+  return last;
 }
 
 Result<uint64_t> Store::entry_count(Database db) const {

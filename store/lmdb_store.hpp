@@ -8,6 +8,7 @@
 //   top       top-level tree and skip list
 //   progress  builder bookkeeping for resuming an interrupted build (may be absent in read-only)
 //   preview   per-tile previews under TileKey bytes (store/tile_preview.hpp; absent in older stores)
+//   tileinfo  per stored tile: root interval and sizes (tile_info.hpp), same key as `tiles`
 //
 // Modes. read_only (serving): MDB_RDONLY | MDB_NOTLS, so any thread of a pool may read and reader
 // slots do not leak per thread; stale reader slots of dead processes are cleared at open
@@ -57,10 +58,10 @@ struct MDB_txn;
 
 namespace shadowtiles::store {
 
-enum class Database { meta, tiles, top, progress, preview };
-inline constexpr size_t kDatabaseCount = 5;
+enum class Database { meta, tiles, top, progress, preview, tileinfo };
+inline constexpr size_t kDatabaseCount = 6;
 
-// The LMDB name of a database ("meta", "tiles", "top", "progress", "preview"); FORMAT.
+// The LMDB name of a database ("meta", "tiles", "top", "progress", "preview", "tileinfo"); FORMAT.
 const char* database_name(Database db);
 
 // View a string key (e.g. of `meta`) as bytes. The view aliases `text`.
@@ -106,6 +107,10 @@ class Store {
   Status write(std::span<const Put> puts, std::span<const Delete> deletes = {});
   // Empties one database, atomically.
   Status clear(Database db);
+  // Bulk load (a merge): one transaction of puts with MDB_APPEND, which skips the B-tree search and
+  // fills pages densely. Within each database the keys must ascend and exceed every key already
+  // there; otherwise nothing is written and the error (invalid_input) says so.
+  Status append(std::span<const Put> puts);
 
   // A copy of the value under `key`, or nullopt; runs in its own read transaction.
   Result<std::optional<std::vector<uint8_t>>> get(Database db, std::span<const uint8_t> key) const;
@@ -116,6 +121,12 @@ class Store {
   using Visitor =
       std::function<bool(std::span<const uint8_t> key, std::span<const uint8_t> value)>;
   Status for_each(Database db, std::span<const uint8_t> prefix, const Visitor& visit) const;
+
+  // Like for_each over all keys, but starting at the first key greater than `after` (empty: the
+  // first key), for reading a database in chunks of short transactions.
+  Status for_each_after(Database db, std::span<const uint8_t> after, const Visitor& visit) const;
+  // The greatest key of a database, or nullopt when it is empty (where an append resumes).
+  Result<std::optional<std::vector<uint8_t>>> last_key(Database db) const;
 
   // Number of entries in a database.
   Result<uint64_t> entry_count(Database db) const;

@@ -268,6 +268,58 @@ TEST(LmdbStore, GrowthWithAnOpenSnapshotFailsCleanlyInsteadOfDeadlocking) {
   EXPECT_TRUE(store->write(big).ok());  // once the snapshot is gone
 }
 
+// The merge's bulk path: MDB_APPEND in key order, refusing a key not above the last one (nothing of
+// that transaction is kept), chunked reads after a key, and the last key where a resume restarts.
+TEST(LmdbStore, AppendInKeyOrderAndChunkedReads) {
+  TempDir dir;
+  auto store = open_or_die(dir.path(), rw_options());
+  ASSERT_TRUE(store);
+  auto last = store->last_key(Database::tiles);
+  ASSERT_TRUE(last.ok());
+  EXPECT_FALSE(last->has_value());
+  std::vector<Store::Put> batch;
+  for (uint32_t x = 0; x < 300; ++x)
+    batch.push_back({Database::tiles, tile_key(3, x, 7), value_for(x, 5000)});  // grows the 1 MiB map
+  ASSERT_TRUE(store->append(batch).ok());
+  last = store->last_key(Database::tiles);
+  ASSERT_TRUE(last.ok() && last->has_value());
+  EXPECT_EQ(**last, tile_key(3, 299, 7));
+
+  std::vector<Store::Put> stale{{Database::tiles, tile_key(3, 300, 0), Bytes{1}},
+                                {Database::tiles, tile_key(3, 5, 0), Bytes{2}}};
+  Status refused = store->append(stale);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::invalid_input);
+  auto count = store->entry_count(Database::tiles);
+  ASSERT_TRUE(count.ok());
+  EXPECT_EQ(*count, 300u);  // the first put of the refused transaction is gone too
+
+  std::vector<Bytes> seen;
+  Bytes after = tile_key(3, 9, 7);
+  ASSERT_TRUE(store->for_each_after(Database::tiles, after, [&](std::span<const uint8_t> key, std::span<const uint8_t> value) {
+                 seen.emplace_back(key.begin(), key.end());
+                 EXPECT_EQ(Bytes(value.begin(), value.end()), value_for(9 + seen.size(), 5000));
+                 return seen.size() < 3;
+               }).ok());
+  ASSERT_EQ(seen.size(), 3u);
+  EXPECT_EQ(seen[0], tile_key(3, 10, 7));
+  EXPECT_EQ(seen[2], tile_key(3, 12, 7));
+  // A key between stored keys starts at the next one; the empty key at the first.
+  seen.clear();
+  ASSERT_TRUE(store->for_each_after(Database::tiles, tile_key(3, 20, 0), [&](std::span<const uint8_t> key, std::span<const uint8_t>) {
+                 seen.emplace_back(key.begin(), key.end());
+                 return false;
+               }).ok());
+  ASSERT_EQ(seen.size(), 1u);
+  EXPECT_EQ(seen[0], tile_key(3, 20, 7));
+  seen.clear();
+  ASSERT_TRUE(store->for_each_after(Database::tiles, {}, [&](std::span<const uint8_t> key, std::span<const uint8_t>) {
+                 seen.emplace_back(key.begin(), key.end());
+                 return false;
+               }).ok());
+  EXPECT_EQ(seen.at(0), tile_key(3, 0, 7));
+}
+
 TEST(LmdbStore, ReadOnlyOpenOfMissingStoreIsNotFound) {
   TempDir dir;
   Store::Options ro;
@@ -354,7 +406,7 @@ TEST(LmdbStore, CompactCopyHasSameContents) {
   Store::Options ro;
   auto copy = open_or_die(target, ro);
   ASSERT_TRUE(copy);
-  for (Database db : {Database::meta, Database::tiles, Database::top, Database::progress}) {
+  for (Database db : {Database::meta, Database::tiles, Database::top, Database::progress, Database::tileinfo}) {
     std::vector<std::pair<Bytes, Bytes>> a, b;
     auto collect = [](auto& out) {
       return [&out](auto key, auto value) {
