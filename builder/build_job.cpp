@@ -153,6 +153,27 @@ void log_open_mesh_hint(const Scene& scene) {
                100.0 * double(open) / double(scene.triangle_count()));
 }
 
+// Work of every tile with triangles, in Morton order (builder/shard_plan.hpp).
+std::vector<TileWork> candidate_work(const LightSpaceScene& light_scene, const TileLayout& layout) {
+  std::vector<TileWork> work;
+  for (uint64_t i = 0; i < layout.tile_count(); ++i) {
+    size_t refs = light_scene.triangles_of(TileLayout::from_morton_index(i)).size();
+    if (refs) work.push_back({i, uint64_t(layout.tile_size()) * layout.tile_size(), refs});
+  }
+  return work;
+}
+
+nlohmann::json plan_json(const std::vector<ShardRange>& plan) {
+  nlohmann::json shards = nlohmann::json::array();
+  for (const ShardRange& r : plan)
+    shards.push_back({{"morton_begin", r.morton_begin}, {"morton_end", r.morton_end}, {"tiles", r.tiles}, {"work", r.work}});
+  return shards;
+}
+
+std::string shard_name(const std::optional<ShardInfo>& shard) {
+  return shard ? "shard " + std::to_string(shard->index) + "/" + std::to_string(shard->count) : "a whole build";
+}
+
 }  // namespace
 
 Result<BuildSummary> run_build(const BuildConfig& config) {
@@ -190,6 +211,21 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
       hex64(XXH64(build_identity(config, *scene_hash, resolution, layout->tile_size()).dump().data(),
                   build_identity(config, *scene_hash, resolution, layout->tile_size()).dump().size(), 0));
 
+  if (config.shard && config.plan_shards_only)
+    return make_error(ErrorCode::invalid_input, "give --shard or --plan-shards, not both");
+  if (config.plan_shards_only) {
+    LightSpaceScene light_scene(*scene, *frame, *layout);
+    auto work = candidate_work(light_scene, *layout);
+    auto plan = plan_shards(work, layout->tile_count(), config.plan_shards_only);
+    BuildSummary summary;
+    summary.tiles_total = layout->tile_count();
+    summary.tiles_candidate = work.size();
+    summary.stats = {{"config_hash", config_hash}, {"tiles", {{"total", summary.tiles_total}, {"with_triangles", work.size()}}},
+                     {"triangle_references", light_scene.triangle_references()},
+                     {"shard_plan", plan_json(plan)}, {"imbalance", shard_imbalance(plan)}};
+    return summary;
+  }
+
   // Store: refuse to mix builds; resume the same one.
   store::Store::Options store_options;
   store_options.mode = store::Store::Mode::read_write;
@@ -207,6 +243,19 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
     auto old_meta = StoreMeta::parse(std::string_view(reinterpret_cast<const char*>((*existing)->data()),
                                                       (*existing)->size()));
     bool same = old_meta && old_meta->config_hash == config_hash;
+    // A shard resumes only its own share of the same build.
+    bool same_share = old_meta && old_meta->shard.has_value() == config.shard.has_value() &&
+                      (!config.shard || (old_meta->shard->index == config.shard->index &&
+                                         old_meta->shard->count == config.shard->count));
+    if (same && !same_share && !config.overwrite)
+      return make_error(ErrorCode::invalid_input,
+                        "store " + config.store_path.string() + " holds " + shard_name(old_meta->shard) +
+                            " of this build, not " +
+                            (config.shard ? "shard " + std::to_string(config.shard->index) + "/" +
+                                                std::to_string(config.shard->count)
+                                          : std::string("a whole build")) +
+                            "; pass --overwrite or choose another --out");
+    same = same && same_share;
     if (!same) {
       if (!config.overwrite)
         return make_error(ErrorCode::invalid_input,
@@ -251,9 +300,22 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
     return s.error();
   std::vector<TileCoord> todo;
   uint64_t candidates = 0;
-  for (uint64_t i = 0; i < layout->tile_count(); ++i) {
-    TileCoord tile = TileLayout::from_morton_index(i);
-    if (light_scene.triangles_of(tile).empty()) continue;
+  std::vector<TileWork> work = candidate_work(light_scene, *layout);
+  uint64_t share_begin = 0, share_end = layout->tile_count();
+  if (config.shard) {
+    auto plan = plan_shards(work, layout->tile_count(), config.shard->count);
+    const ShardRange& mine = plan[config.shard->index];
+    share_begin = mine.morton_begin;
+    share_end = mine.morton_end;
+    meta.shard = ShardInfo{config.shard->index, config.shard->count, mine.morton_begin, mine.morton_end,
+                           mine.tiles, mine.work, false, config.zstd_level};
+    spdlog::info("shard {}/{}: Morton tiles [{}, {}), {} tiles with triangles, work {:.3g} (imbalance of the plan {:.3f})",
+                 config.shard->index, config.shard->count, share_begin, share_end, mine.tiles, mine.work,
+                 shard_imbalance(plan));
+  }
+  for (const TileWork& w : work) {
+    if (w.morton_index < share_begin || w.morton_index >= share_end) continue;
+    TileCoord tile = TileLayout::from_morton_index(w.morton_index);
     ++candidates;
     if (!done.count(tile)) todo.push_back(tile);
   }
@@ -395,7 +457,7 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   // hierarchical method, with the skip list embedded (served as /v1/skiplist).
   auto top_start = Clock::now();
   nlohmann::json top_bytes = nlohmann::json::object();
-  {
+  if (!config.shard) {  // a shard holds only some roots: the merge builds the top levels
     std::vector<DepthInterval> grid(size_t(layout->tiles_per_side()) * layout->tiles_per_side());
     for (const auto& [tile, root] : roots) grid[size_t(tile.y) * layout->tiles_per_side() + tile.x] = root;
     auto tops = encode_top_levels(config.methods, layout->tiles_per_side(), std::move(grid), layout->tile_level(),
@@ -453,7 +515,14 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
       {"payload_bytes_by_method", raw_bytes},
       {"peak_memory_mib", peak_memory_mib()},
   };
-  meta.complete = true;
+  if (meta.shard) {
+    meta.shard->complete = true;  // the share is done; the whole build is complete once merged
+    summary.stats["shard"] = {{"index", meta.shard->index}, {"count", meta.shard->count},
+                              {"morton_begin", meta.shard->morton_begin}, {"morton_end", meta.shard->morton_end},
+                              {"work", meta.shard->work}};
+  } else {
+    meta.complete = true;
+  }
   meta.build_stats = summary.stats;
   std::string text = meta.to_json().dump();
   std::vector<store::Store::Put> puts{{store::Database::meta, bytes_of(kMetaBuildKey), bytes_of(text)}};

@@ -22,6 +22,7 @@
 
 #include "builder/mh_builder.hpp"
 #include "builder/scene_loader.hpp"
+#include "builder/shard_plan.hpp"
 #include "codec/light_frame.hpp"
 #include "store/method.hpp"
 #include "common/result.hpp"
@@ -52,6 +53,12 @@ struct BuildConfig {
   // raw gives them. Off by default: it costs size (stability suite, issue #8: nefertiti 2048^2 MH
   // x1.6, terragen 1024^2 x2.2) and, unoptimised, build time (fzk_haus 8192^2: 9.5 s -> 7 min).
   bool cap_exits_at_receiver_surfaces = false;
+  // Scale-out (docs/scale-out.md): build only share `shard->index` of `shard->count` into this
+  // store (a shard store for `shadowtiles merge`). The config hash stays the whole build's.
+  std::optional<ShardSpec> shard;
+  // Plan only: load and index the scene, put the plan for this many shards in the summary's stats
+  // ("shard_plan", "imbalance") and return without touching any store.
+  uint32_t plan_shards_only = 0;
   // Progress callback, called from the coordinating thread about once a second.
   std::function<void(const std::string& line)> on_progress;
   // Test hook: after this many tiles are committed, the process kills itself with SIGKILL.

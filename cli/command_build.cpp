@@ -13,7 +13,8 @@ namespace shadowtiles::cli {
 namespace {
 
 struct BuildFlags {
-  std::string scene, out, sun, light_dir, methods = "dagmh", up = "z", construction = "bottom-up";
+  std::string scene, out, sun, light_dir, methods = "dagmh", up = "z", construction = "bottom-up", shard;
+  uint32_t plan_shards = 0;
   uint32_t resolution = 0;
   double texel_size = 0;
   uint32_t tile = 4096;
@@ -60,6 +61,13 @@ int run(const BuildFlags& flags) {
   config.overwrite = flags.overwrite;
   config.cap_exits_at_receiver_surfaces = flags.exit_caps;
   config.debug_kill_after_tiles = flags.kill_after;
+  if (!flags.shard.empty()) {
+    auto shard = parse_shard_spec(flags.shard);
+    if (!shard) { spdlog::error("{}", shard.error().message); return kInvalidInput; }
+    config.shard = *shard;
+  }
+  config.plan_shards_only = flags.plan_shards;
+  if (flags.out.empty() && !flags.plan_shards) { spdlog::error("--out is required"); return kInvalidInput; }
   config.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
 
   auto summary = run_build(config);
@@ -67,7 +75,7 @@ int run(const BuildFlags& flags) {
     spdlog::error("build failed ({}): {}", error_code_name(summary.error().code), summary.error().message);
     return exit_code_for(summary.error());
   }
-  if (flags.json) {
+  if (flags.json || flags.plan_shards) {
     std::cout << summary->stats.dump(2) << "\n";
   } else {
     const auto& s = summary->stats;
@@ -97,7 +105,12 @@ void add_build_command(CLI::App& app, int& exit_code) {
   auto flags = std::make_shared<BuildFlags>();
   CLI::App* cmd = app.add_subcommand("build", "Bake a scene's sun shadows into a store");
   cmd->add_option("scene", flags->scene, "Scene file (OBJ, PLY, glTF/GLB, FBX, DAE, IFC, TER, ...)")->required();
-  cmd->add_option("--out,-o", flags->out, "Store directory (LMDB) to write")->required();
+  cmd->add_option("--out,-o", flags->out, "Store directory (LMDB) to write (required unless --plan-shards)");
+  cmd->add_option("--shard", flags->shard,
+                  "I/N: build only share I of N (balanced by work, contiguous in Morton order) into --out, "
+                  "a local shard store for `shadowtiles merge` (docs/scale-out.md)");
+  cmd->add_option("--plan-shards", flags->plan_shards,
+                  "Print the work-balanced plan for N shards (JSON) and exit; builds nothing");
   auto* sun = cmd->add_option("--sun", flags->sun, "Sun azimuth,elevation in degrees (default 135,45)");
   cmd->add_option("--light-dir", flags->light_dir, "Direction the light travels, X,Y,Z")->excludes(sun);
   cmd->add_option("--up", flags->up, "Scene up axis for --sun: z or y")->capture_default_str();

@@ -26,6 +26,8 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", quiet, "Warnings and errors only");
   int exit_code = shadowtiles::cli::kOk;
   shadowtiles::cli::add_build_command(app, exit_code);
+  shadowtiles::cli::add_merge_command(app, exit_code);
+  shadowtiles::cli::add_store_diff_command(app, exit_code);
   shadowtiles::cli::add_query_command(app, exit_code);
   shadowtiles::cli::add_inspect_command(app, exit_code);
   shadowtiles::cli::add_verify_command(app, exit_code);

@@ -46,7 +46,7 @@ bool StoreMeta::has_method(store::Method method) const {
 nlohmann::json StoreMeta::to_json() const {
   nlohmann::json methods_json = nlohmann::json::array();
   for (store::Method m : methods) methods_json.push_back(store::method_name(m));
-  return {
+  nlohmann::json json = {
       {"format_version", format_version},
       {"builder_version", builder_version},
       {"config_hash", config_hash},
@@ -62,6 +62,11 @@ nlohmann::json StoreMeta::to_json() const {
       {"exit_margin", exit_margin},
       {"build_stats", build_stats},
   };
+  if (shard)
+    json["shard"] = {{"index", shard->index}, {"count", shard->count}, {"morton_begin", shard->morton_begin},
+                     {"morton_end", shard->morton_end}, {"tiles", shard->tiles}, {"work", shard->work},
+                     {"complete", shard->complete}, {"zstd_level", shard->zstd_level}};
+  return json;
 }
 
 Result<StoreMeta> StoreMeta::from_json(const nlohmann::json& json) {
@@ -147,6 +152,26 @@ Result<StoreMeta> StoreMeta::from_json(const nlohmann::json& json) {
     meta.methods.push_back(*method);
   }
   if (json.contains("build_stats")) meta.build_stats = json["build_stats"];
+  if (json.contains("shard")) {
+    const auto& shard = json["shard"];
+    if (!shard.is_object()) return make_error(ErrorCode::corrupt_data, "meta: 'shard' must be an object");
+    auto index = field<uint32_t>(shard, "index");
+    auto count = field<uint32_t>(shard, "count");
+    auto begin = field<uint64_t>(shard, "morton_begin");
+    auto end = field<uint64_t>(shard, "morton_end");
+    auto tiles = field<uint64_t>(shard, "tiles");
+    auto work = field<double>(shard, "work");
+    auto done = field<bool>(shard, "complete");
+    auto level = field<int>(shard, "zstd_level");
+    for (const Error* e : {index.ok() ? nullptr : &index.error(), count.ok() ? nullptr : &count.error(),
+                           begin.ok() ? nullptr : &begin.error(), end.ok() ? nullptr : &end.error(),
+                           tiles.ok() ? nullptr : &tiles.error(), work.ok() ? nullptr : &work.error(),
+                           done.ok() ? nullptr : &done.error(), level.ok() ? nullptr : &level.error()})
+      if (e) return *e;
+    if (*count < 1 || *index >= *count || *begin > *end)
+      return make_error(ErrorCode::corrupt_data, "meta: shard index, count or range out of order");
+    meta.shard = ShardInfo{*index, *count, *begin, *end, *tiles, *work, *done, *level};
+  }
 
   // The frame and layout must be constructible, or every lookup would fail later.
   if (auto frame = meta.light_frame(); !frame)

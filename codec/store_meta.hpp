@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,19 @@ constexpr int kStoreFormatVersion = 1;
 constexpr const char* kMetaBuildKey = "build";
 // Key of a hierarchical method's top-level tree (with embedded skip list) in the `top` database.
 inline std::string top_tree_key(store::Method method) { return std::string("top/") + store::method_name(method); }
+
+// A shard store (`build --shard I/N`) holds one share of a build; `shadowtiles merge` joins them.
+struct ShardInfo {
+  uint32_t index = 0;
+  uint32_t count = 1;
+  uint64_t morton_begin = 0;  // the share: Morton tile indices [begin, end)
+  uint64_t morton_end = 0;
+  uint64_t tiles = 0;         // tiles with triangles in the share (its progress records when done)
+  double work = 0;            // planned work (builder/shard_plan.hpp)
+  bool complete = false;      // every tile of the share committed
+  int zstd_level = 3;         // the build's, so the merge compresses the top levels alike
+  bool operator==(const ShardInfo&) const = default;
+};
 
 struct StoreMeta {
   int format_version = kStoreFormatVersion;
@@ -46,6 +60,8 @@ struct StoreMeta {
   double default_bias = 0;  // world units
   double exit_margin = 0;   // world units the builder pulled exits back by
   nlohmann::json build_stats = nlohmann::json::object();
+  // Set only in a shard store, whose `complete` stays false: it answers for its share alone.
+  std::optional<ShardInfo> shard;
 
   Result<LightFrame> light_frame() const;
   Result<TileLayout> layout() const;

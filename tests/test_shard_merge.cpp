@@ -1,0 +1,230 @@
+// Sharded builds and `shadowtiles merge` (issue 16): the merge of N shard stores equals the
+// one-machine build of the same config (every blob, info record, progress record and top tree
+// byte-identical, meta equal except timings), mismatched, missing or overlapping shards are refused
+// naming the shard, and both the shard builds and the merge resume after a kill.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "builder/shard_plan.hpp"
+#include "codec/store_meta.hpp"
+#include "store/lmdb_store.hpp"
+#include "tests/testing_support.hpp"
+
+namespace shadowtiles {
+namespace {
+
+using testing::TempDir;
+using Bytes = std::vector<uint8_t>;
+using Contents = std::map<Bytes, Bytes>;
+
+std::string cli() { return testing::cli_path().string(); }
+
+std::string build_command(const std::filesystem::path& out, const std::string& extra = "") {
+  return cli() + " build " + testing::shared_scene("fzk_haus/fzk_haus.obj").string() +
+         " --up y --sun 135,45 --resolution 4096 --tile 512 --method raw,mh,mmh,dagmh -j 2 --out " + out.string() + " " +
+         extra;
+}
+
+Contents read_all(const std::filesystem::path& dir, store::Database db) {
+  store::Store::Options options;
+  auto store = store::Store::open(dir, options);
+  EXPECT_TRUE(store.ok()) << dir;
+  Contents contents;
+  if (!store.ok()) return contents;
+  EXPECT_TRUE((*store)->for_each(db, {}, [&](std::span<const uint8_t> k, std::span<const uint8_t> v) {
+    contents.emplace(Bytes(k.begin(), k.end()), Bytes(v.begin(), v.end()));
+    return true;
+  }).ok());
+  return contents;
+}
+
+StoreMeta read_meta(const std::filesystem::path& dir) {
+  Contents meta = read_all(dir, store::Database::meta);
+  Bytes key(kMetaBuildKey, kMetaBuildKey + std::strlen(kMetaBuildKey));
+  EXPECT_EQ(meta.count(key), 1u) << dir;
+  auto parsed = StoreMeta::parse(std::string(meta[key].begin(), meta[key].end()));
+  EXPECT_TRUE(parsed.ok()) << dir;
+  return parsed.ok() ? *parsed : StoreMeta{};
+}
+
+// The merged store equals the one-machine build: data byte for byte, meta except timings.
+void expect_same_build(const std::filesystem::path& merged, const std::filesystem::path& single) {
+  for (auto db : {store::Database::tiles, store::Database::tileinfo, store::Database::preview, store::Database::progress,
+                  store::Database::top}) {
+    Contents a = read_all(merged, db), b = read_all(single, db);
+    EXPECT_FALSE(b.empty()) << store::database_name(db);
+    EXPECT_EQ(a.size(), b.size()) << store::database_name(db);
+    EXPECT_TRUE(a == b) << store::database_name(db) << " differs";
+  }
+  StoreMeta a = read_meta(merged), b = read_meta(single);
+  EXPECT_TRUE(a.complete);
+  EXPECT_FALSE(a.shard.has_value());
+  auto stats_a = a.build_stats, stats_b = b.build_stats;
+  for (const char* key : {"bytes_by_method", "payload_bytes_by_method", "top_bytes_by_method", "rays"})
+    EXPECT_EQ(stats_a[key], stats_b[key]) << key;
+  EXPECT_EQ(stats_a["tiles"]["with_triangles"], stats_b["tiles"]["with_triangles"]);
+  EXPECT_EQ(stats_a["tiles"]["stored"], stats_b["tiles"]["stored"]);
+  a.build_stats = b.build_stats = nlohmann::json::object();
+  EXPECT_EQ(a.to_json(), b.to_json());
+}
+
+int run(const std::string& command, std::string* output = nullptr) {
+  std::string text;
+  int status = testing::run_command(command, &text);
+  if (output) *output = text;
+  return status;
+}
+
+class ShardMerge : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir();
+    ASSERT_EQ(run(build_command(dir_->path() / "single")), 0);
+    for (int i = 0; i < 4; ++i) {
+      auto out = dir_->path() / ("shard" + std::to_string(i));
+      std::string shard = "--shard " + std::to_string(i) + "/4";
+      if (i == 1) {
+        // Killed after 2 tiles, then resumed by rerunning the same command.
+        EXPECT_NE(run(build_command(out, shard + " --debug-kill-after-tiles 2")), 0);
+        std::string log;
+        ASSERT_EQ(run(build_command(out, shard), &log), 0) << log;
+        EXPECT_NE(log.find("already committed"), std::string::npos);
+      } else {
+        ASSERT_EQ(run(build_command(out, shard)), 0);
+      }
+    }
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static std::filesystem::path shard(int i) { return dir_->path() / ("shard" + std::to_string(i)); }
+  static std::string shards() {
+    std::string list;
+    for (int i : {2, 0, 3, 1}) list += shard(i).string() + " ";  // any order
+    return list;
+  }
+  static TempDir* dir_;
+};
+TempDir* ShardMerge::dir_ = nullptr;
+
+TEST_F(ShardMerge, ShardsHoldDisjointSharesRecordingTheWholeBuild) {
+  StoreMeta single = read_meta(dir_->path() / "single");
+  uint64_t tiles = 0, begin = 0;
+  for (int i = 0; i < 4; ++i) {
+    StoreMeta meta = read_meta(shard(i));
+    EXPECT_EQ(meta.config_hash, single.config_hash);
+    EXPECT_FALSE(meta.complete);  // a share alone answers wrongly elsewhere: never served
+    ASSERT_TRUE(meta.shard.has_value());
+    EXPECT_EQ(meta.shard->index, uint32_t(i));
+    EXPECT_TRUE(meta.shard->complete);
+    EXPECT_EQ(meta.shard->morton_begin, begin);
+    begin = meta.shard->morton_end;
+    tiles += meta.shard->tiles;
+    EXPECT_GT(meta.shard->tiles, 0u);
+    EXPECT_TRUE(read_all(shard(i), store::Database::top).empty());
+  }
+  EXPECT_EQ(begin, 64u);
+  EXPECT_EQ(tiles, single.build_stats["tiles"]["with_triangles"].get<uint64_t>());
+}
+
+TEST_F(ShardMerge, MergeEqualsTheOneMachineBuild) {
+  auto out = dir_->path() / "merged";
+  std::string log;
+  ASSERT_EQ(run(cli() + " merge " + shards() + "--out " + out.string(), &log), 0) << log;
+  expect_same_build(out, dir_->path() / "single");
+  // Merging again into the complete store is a no-op.
+  ASSERT_EQ(run(cli() + " merge " + shards() + "--out " + out.string(), &log), 0) << log;
+  EXPECT_NE(log.find("already holds"), std::string::npos) << log;
+  // The merged store answers like the one-machine build (verify re-renders every tile).
+  ASSERT_EQ(run(cli() + " verify " + out.string() + " --method mmh", &log), 0) << log;
+}
+
+TEST_F(ShardMerge, KilledMergeResumes) {
+  auto out = dir_->path() / "resumed";
+  EXPECT_NE(run(cli() + " merge " + shards() + "--out " + out.string() +
+                " --transaction-mib 1 --debug-kill-after-transactions 2"),
+            0);
+  auto partial = read_all(out, store::Database::tiles);
+  EXPECT_FALSE(partial.empty());
+  std::string log;
+  ASSERT_EQ(run(cli() + " merge " + shards() + "--out " + out.string() + " --json", &log), 0) << log;
+  EXPECT_NE(log.find("\"resumed\": true"), std::string::npos) << log;
+  expect_same_build(out, dir_->path() / "single");
+}
+
+TEST_F(ShardMerge, MissingDuplicateOrForeignShardsAreRefusedNamingTheShard) {
+  auto out = dir_->path() / "refused";
+  std::string log;
+  EXPECT_EQ(run(cli() + " merge " + shard(0).string() + " " + shard(1).string() + " " + shard(3).string() +
+                    " --out " + out.string(), &log), 2);
+  EXPECT_NE(log.find("shard 2/4 is missing"), std::string::npos) << log;
+  EXPECT_EQ(run(cli() + " merge " + shards() + shard(0).string() + " --out " + out.string(), &log), 2);
+  EXPECT_NE(log.find("are both shard 0/4"), std::string::npos) << log;
+  EXPECT_NE(log.find(shard(0).string()), std::string::npos) << log;
+  // A share of another build (other sun): named, with both build ids.
+  auto foreign = dir_->path() / "foreign";
+  ASSERT_EQ(run(cli() + " build " + testing::shared_scene("fzk_haus/fzk_haus.obj").string() +
+                " --up y --sun 90,30 --resolution 4096 --tile 512 --method raw,mh,mmh,dagmh --shard 2/4 --out " +
+                foreign.string()), 0);
+  EXPECT_EQ(run(cli() + " merge " + shard(0).string() + " " + shard(1).string() + " " + foreign.string() + " " +
+                    shard(3).string() + " --out " + out.string(), &log), 2);
+  EXPECT_NE(log.find("different builds"), std::string::npos) << log;
+  EXPECT_NE(log.find(foreign.string()), std::string::npos) << log;
+  // A whole build is not a shard; an unfinished shard is refused.
+  EXPECT_EQ(run(cli() + " merge " + (dir_->path() / "single").string() + " --out " + out.string(), &log), 2);
+  EXPECT_NE(log.find("not a shard store"), std::string::npos) << log;
+  auto unfinished = dir_->path() / "unfinished";
+  EXPECT_NE(run(build_command(unfinished, "--shard 2/4 --debug-kill-after-tiles 1")), 0);
+  EXPECT_EQ(run(cli() + " merge " + shard(0).string() + " " + shard(1).string() + " " + unfinished.string() + " " +
+                    shard(3).string() + " --out " + out.string(), &log), 2);
+  EXPECT_NE(log.find("is not finished"), std::string::npos) << log;
+  // A shard store is resumed only by its own share.
+  EXPECT_EQ(run(build_command(shard(0), "--shard 1/4"), &log), 2);
+  EXPECT_NE(log.find("holds shard 0/4 of this build"), std::string::npos) << log;
+  EXPECT_FALSE(std::filesystem::exists(out / "data.mdb") && !read_all(out, store::Database::tiles).empty());
+}
+
+TEST(ShardPlan, RangesTileTheMapAndEachShareIsWithinOneTileOfIdeal) {
+  std::vector<TileWork> tiles;
+  uint64_t refs_seed = 1;
+  for (uint64_t m = 0; m < 1024; m += 1 + (m % 7 == 0 ? 5 : 0)) {
+    refs_seed = refs_seed * 6364136223846793005ull + 1442695040888963407ull;
+    tiles.push_back({m, 65536, (refs_seed >> 40) % 20000});
+  }
+  for (uint32_t n : {1u, 2u, 3u, 4u, 7u, 16u}) {
+    auto plan = plan_shards(tiles, 1024, n);
+    ASSERT_EQ(plan.size(), n);
+    EXPECT_EQ(plan.front().morton_begin, 0u);
+    EXPECT_EQ(plan.back().morton_end, 1024u);
+    double total = 0, most_tile = 0;
+    for (const auto& t : tiles) { total += t.work(); most_tile = std::max(most_tile, t.work()); }
+    uint64_t count = 0;
+    for (uint32_t s = 0; s < n; ++s) {
+      if (s) { EXPECT_EQ(plan[s].morton_begin, plan[s - 1].morton_end); }
+      uint64_t inside = 0;
+      for (const auto& t : tiles) inside += t.morton_index >= plan[s].morton_begin && t.morton_index < plan[s].morton_end;
+      EXPECT_EQ(inside, plan[s].tiles);
+      count += inside;
+      EXPECT_LE(std::abs(plan[s].work - total / n), most_tile + 1e-6) << "shard " << s << " of " << n;
+    }
+    EXPECT_EQ(count, tiles.size());
+  }
+  // More shards than tiles: empty shares, still a tiling.
+  auto sparse = plan_shards(std::span(tiles).first(2), 1024, 5);
+  EXPECT_EQ(sparse.back().morton_end, 1024u);
+  for (uint32_t s = 1; s < 5; ++s) EXPECT_EQ(sparse[s].morton_begin, sparse[s - 1].morton_end);
+}
+
+TEST(ShardPlan, ParsesIndexOverCount) {
+  auto spec = parse_shard_spec("3/16");
+  ASSERT_TRUE(spec.ok());
+  EXPECT_EQ(spec->index, 3u);
+  EXPECT_EQ(spec->count, 16u);
+  for (const char* bad : {"4/4", "1", "/4", "1/", "-1/4", "1/0", "a/b", "1/4x", "0/70000"})
+    EXPECT_FALSE(parse_shard_spec(bad).ok()) << bad;
+}
+
+}  // namespace
+}  // namespace shadowtiles
