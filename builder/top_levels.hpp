@@ -1,4 +1,4 @@
-// Top levels (DESIGN.md §5 "tiled build"): every tile's root interval forms a coarse map of
+// Top levels (docs/architecture.md, store layout): every tile's root interval forms a coarse map of
 // tiles_per_side² texels, itself compressed per hierarchical method (an MH with the skip list
 // embedded for mh/mmh, a DAG-MH for dagmh) and stored in `top` under top_tree_key(method).
 // One function for the one-machine build and for `shadowtiles merge`, so both write the same bytes.
