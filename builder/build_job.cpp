@@ -80,7 +80,8 @@ Status validate(const BuildConfig& config) {
     return make_error(ErrorCode::invalid_input, "give exactly one of resolution and texel size");
   if (!(config.bias_texels >= 0) || !(config.exit_margin_texels >= config.bias_texels))
     return make_error(ErrorCode::invalid_input, "need 0 <= bias <= exit margin (in texels)");
-  if (config.store_path.empty()) return make_error(ErrorCode::invalid_input, "no output store given");
+  if (config.store_path.empty() && !config.plan_shards_only)
+    return make_error(ErrorCode::invalid_input, "no output store given");
   return {};
 }
 
