@@ -75,7 +75,7 @@ int run(const std::string& path_a, const std::string& path_b) {
     std::printf("different: meta\n  %s\n  %s\n", ma->to_json().dump().c_str(), mb->to_json().dump().c_str());
     return kCheckFailed;
   }
-  std::printf("same build: tiles, tileinfo, progress, top byte-identical; meta equal except timings\n");
+  std::printf("same build: tiles, tileinfo, preview, progress, top byte-identical; meta equal except timings\n");
   return kOk;
 }
 

@@ -17,6 +17,8 @@ packages=(
   wrk curl                 # HTTP load benchmark (bench/server_load.sh)
   libjs-leaflet            # the inspector page's map (served by `shadowtiles serve` from /usr/share/javascript/leaflet)
   chromium nodejs          # the inspector's real-browser test (tests/browser), headless
+  slurmctld slurmd slurm-client munge  # scale-out: the Slurm integration test (tests/slurm_array_test.sh)
+  nginx                    # serving replicas behind a caching proxy (config/nginx-replicas.conf)
 )
 # npm for playwright-core (tests/browser/package.json); a node distribution that ships npm itself
 # (NodeSource) conflicts with Debian's npm package.
