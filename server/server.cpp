@@ -1,5 +1,7 @@
 #include "server/server.hpp"
 
+#include <unistd.h>
+
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -223,8 +225,16 @@ Result<std::unique_ptr<Server>> Server::bind(const ServerConfig& config) {
     if (ConnectionStream* stream = HttpService::current()) stream->begin_body(declared_body_bytes(req));
     return httplib::Server::HandlerResponse::Unhandled;
   });
-  http.set_post_routing_handler([&state](const httplib::Request& req, httplib::Response& res) {
+  // Behind a proxy with several replicas, every answer says which replica gave it.
+  std::string replica = config.replica_name;
+  if (replica.empty()) {
+    char host[256] = {};
+    gethostname(host, sizeof host - 1);
+    replica = std::string(host) + ":" + std::to_string(config.port);
+  }
+  http.set_post_routing_handler([&state, replica](const httplib::Request& req, httplib::Response& res) {
     state.cors.decorate(req, res);
+    res.set_header("X-Shadow-Replica", replica);
   });
   // Errors the routes did not describe themselves (unknown path, body over the limit, malformed
   // request line) still get the JSON error shape.

@@ -80,11 +80,12 @@ nlohmann::json ServerConfig::to_json() const {
           {"keep_alive_max_count", keep_alive_max_count},
           {"keep_alive_timeout_s", keep_alive_timeout_s},
           {"reload_poll_s", reload_poll_s},
-              {"render_threads", render_threads},
+          {"render_threads", render_threads},
           {"render_queue", render_queue},
           {"render_timeout_ms", render_timeout_ms},
           {"render_cache_bytes", render_cache_bytes},
-          {"leaflet_dir", leaflet_dir}};
+          {"leaflet_dir", leaflet_dir},
+          {"replica_name", replica_name}};
 }
 
 Result<ServerConfig> ServerConfig::from_json(const nlohmann::json& json, ServerConfig config) {
@@ -146,6 +147,13 @@ Result<ServerConfig> ServerConfig::from_json(const nlohmann::json& json, ServerC
       {"render_queue", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.render_queue); }},
       {"render_timeout_ms", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.render_timeout_ms); }},
       {"render_cache_bytes", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU64, config.render_cache_bytes); }},
+      {"replica_name",
+       [&](const nlohmann::json& v, const std::string& k) -> Status {
+         if (!v.is_string()) return bad(k, "expected a string");
+         config.replica_name = v.get<std::string>();
+         if (config.replica_name.find_first_of("\r\n") != std::string::npos) return bad(k, "must be one line");
+         return {};
+       }},
   };
   for (const auto& [key, value] : json.items()) {
     if (key.starts_with("_")) continue;  // "_comment" and friends: documentation inside the file

@@ -46,6 +46,7 @@ struct ServerConfig {
   unsigned render_timeout_ms = 5000;     // one render's time budget → 503 when exceeded
   uint64_t render_cache_bytes = uint64_t(48) << 20;  // decoded previews kept for rendering
   std::string leaflet_dir = "/usr/share/javascript/leaflet";  // Debian's libjs-leaflet, served to the page
+  std::string replica_name;              // X-Shadow-Replica on every answer; empty: "<hostname>:<port>"
 
   // Range checks shared by the file parser and CLI overrides.
   Status validate() const;
