@@ -19,11 +19,7 @@
 namespace shadowtiles {
 namespace {
 
-struct BatchItem {
-  uint64_t key;  // Morton code of the texel; kOffMap for points off the map
-  uint32_t index;
-  float threshold;  // biased depth
-};
+using BatchItem = ShadowMap::BatchSortItem;
 constexpr uint64_t kOffMap = ~uint64_t(0);
 constexpr unsigned kBucketBits = 12;
 constexpr size_t kPointsPerChunk = 8192;
@@ -74,6 +70,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   const double bias_world = options.bias.value_or(meta_.default_bias);
   if (!std::isfinite(bias_world) || bias_world < 0)
     return make_error(ErrorCode::invalid_input, "bias must be finite and >= 0");
+  const double bias_depth = frame_.depth_from_world(bias_world);
   auto max_level_or = tile_max_level(options.level);
   if (!max_level_or) return max_level_or.error();
   const unsigned max_level = *max_level_or;
@@ -104,8 +101,12 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   const unsigned low_bits = key_bits - bucket_bits;
   const size_t buckets = size_t(1) << bucket_bits;  // + 1: off the map
   const size_t chunks = (n + kPointsPerChunk - 1) / kPointsPerChunk;
-  std::vector<BatchItem> items(n), sorted(n);
-  std::vector<uint32_t> histogram(chunks * (buckets + 1), 0);
+  // Buffers kept in `out` between batches (see BatchAnswers); their old contents are overwritten.
+  if (out.sort_items.size() < 2 * n) out.sort_items.resize(2 * n);
+  BatchItem* const items = out.sort_items.data();
+  BatchItem* const sorted = items + n;
+  std::vector<uint32_t>& histogram = out.sort_histogram;
+  histogram.assign(chunks * (buckets + 1), 0);
   const double resolution = layout_.resolution();
   auto bucket_of = [&](uint64_t key) { return key == kOffMap ? buckets : size_t(key >> low_bits); };
 
@@ -125,7 +126,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
           item.threshold = 0;
         } else {
           item.key = morton_encode(uint32_t(light.u), uint32_t(light.v));
-          item.threshold = biased_depth(light.depth, bias_world);
+          item.threshold = float(std::min(light.depth, 1.0) - bias_depth);  // biased_depth(), bias hoisted
         }
         ++hist[bucket_of(item.key)];
       }
@@ -175,6 +176,8 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
     for (size_t b; !failed && (b = next_bucket.fetch_add(1, std::memory_order_relaxed)) < buckets;) {
       const uint32_t s = bucket_start[b], e = bucket_start[b + 1];
       if (s == e) continue;
+      // Always sorted, even sparse buckets whose points share no node below the skip-list entry:
+      // skipping the sort saved 10-15% of MH/DAG-MH instructions but cost 6-10% of their time.
       sort_low_bits(&sorted[s], &items[s], e - s, low_bits);
       for (uint32_t run = s; run < e && !failed;) {
         const uint64_t id = sorted[run].key >> tile_key_shift;

@@ -148,6 +148,41 @@ TEST_F(ShadowMapBatchTest, CoarseLevelsShuffledOrdersAndPoolsAgree) {
   }
 }
 
+// query_batch sorts a bucket along the curve only when its points are dense; the fixture's points are
+// sparse (about one per bucket), so here every texel of a region around a tile corner, on the surface
+// and just above or below it, makes dense buckets: the sorted shared-path walk must agree too.
+TEST_F(ShadowMapBatchTest, DenseBatchesAgree) {
+  auto map = ShadowMap::open(store());
+  ASSERT_TRUE(map.ok());
+  const ShadowMap& m = **map;
+  const uint32_t C = m.layout().resolution() / 2;  // a tile corner at the scene's centre
+  std::vector<Vec3> dense;
+  for (uint32_t v = C - 40; v < C + 40; ++v)
+    for (uint32_t u = C - 40; u < C + 40; ++u) {
+      auto value = m.texel_value(store::Method::raw, u, v);
+      ASSERT_TRUE(value.ok());
+      const double depth = std::isfinite(*value) ? double(*value) + ((u + v) % 3 - 1.0) * 0.02 : 0.5;
+      dense.push_back(m.frame().to_world({u + 0.3 + 0.4 * ((u * 7 + v) % 2), v + 0.5, depth}));
+    }
+  std::shuffle(dense.begin(), dense.end(), std::mt19937(9));
+  size_t shadowed = 0;
+  for (store::Method method : m.meta().methods) {
+    for (unsigned kernel : {1u, 3u}) {
+      std::vector<uint32_t> outside;
+      const std::vector<float> expected = single_answers(m, method, dense, kernel, {}, &outside);
+      ShadowMap::BatchOptions options;
+      options.kernel = kernel;
+      options.threads = 2;
+      ShadowMap::BatchAnswers answers;
+      ASSERT_TRUE(m.query_batch(dense, method, options, answers).ok());
+      EXPECT_EQ(answers.lit, expected) << store::method_name(method) << " k" << kernel;
+      EXPECT_TRUE(answers.outside.empty());
+      shadowed += std::count(expected.begin(), expected.end(), 0.0f);
+    }
+  }
+  EXPECT_GT(shadowed, dense.size() / 2) << "the dense points see shadow too";
+}
+
 TEST_F(ShadowMapBatchTest, BadBatchesAreErrors) {
   auto map = ShadowMap::open(store());
   ASSERT_TRUE(map.ok());
