@@ -12,6 +12,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/exit_codes.hpp"
+#include "server/allocator_tuning.hpp"
 #include "server/server.hpp"
 #include "server/shutdown_signals.hpp"
 
@@ -69,6 +70,7 @@ int run(const ServeFlags& flags) {
         else if (!*reloaded) spdlog::info("SIGHUP: the store path still holds the served build");
       });
 
+  if (!server::keep_batch_buffers_resident()) spdlog::debug("allocator tuning not available: batch buffers are mapped per request");
   auto bound = server::Server::bind(config);
   if (!bound) {
     spdlog::error("{}", bound.error().message);
