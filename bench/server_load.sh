@@ -3,7 +3,8 @@
 # Builds a store, starts the server (default 2 threads), then measures, each bounded in time:
 #   1. single-point GET /v1/shadow at random points of the scene's box   (wrk, Lua)
 #   2. tile GET /v1/tiles/{method}/{z}/{x}/{y} over every tile position   (wrk, Lua)
-#   3. binary POST /v1/shadow batches of 100k float32 points              (curl, 5 runs)
+#   3. binary POST /v1/shadow batches of 100k float32 points, per method in BATCH_METHODS: 12 on one
+#      keep-alive connection of one curl process (2 warm-up, median of 10; curl's start-up excluded)
 #   4. /healthz and a point query on new connections while max_connections - 2 slow clients
 #      (trickled headers, stalled bodies) hold connections            (bench/slow_clients.py)
 # and prints requests/s, p50/p99 latency and points/s. The server is always killed at the end.
@@ -14,7 +15,8 @@
 # Env: DURATION (wrk seconds per run, default 10), CONNECTIONS (wrk connection counts to run, default
 #      "2 64": one per server thread, then as many keep-alive clients as max_connections: each has
 #      its own I/O thread, query work shares the THREADS query slots), THREADS (server, default 2),
-#      METHOD (default raw), UP (scene up axis, default y).
+#      METHOD (GET rows, default raw), BATCH_METHODS (batch rows, default "raw mh dagmh"), UP (scene up
+#      axis, default y).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${1:-build}
@@ -25,6 +27,7 @@ DURATION=${DURATION:-10}
 CONNECTIONS=${CONNECTIONS:-2 64}
 THREADS=${THREADS:-2}
 METHOD=${METHOD:-raw}
+BATCH_METHODS=${BATCH_METHODS:-raw mh dagmh}
 UP=${UP:-y}
 CLI="$BUILD_DIR/cli/shadowtiles"
 
@@ -45,8 +48,9 @@ cleanup() {
 }
 trap cleanup EXIT INT TERM
 
-echo "== building $SCENE at ${RESOLUTION}^2, tiles ${TILE}^2, method $METHOD"
-"$CLI" build "$SCENE" --up "$UP" --resolution "$RESOLUTION" --tile "$TILE" --method "$METHOD" \
+BUILD_METHODS=$(echo "$METHOD $BATCH_METHODS" | tr ' ' '\n' | awk 'NF && !seen[$0]++' | paste -sd, -)
+echo "== building $SCENE at ${RESOLUTION}^2, tiles ${TILE}^2, methods $BUILD_METHODS"
+"$CLI" build "$SCENE" --up "$UP" --resolution "$RESOLUTION" --tile "$TILE" --method "$BUILD_METHODS" \
   --out "$WORK/store" -q > /dev/null
 
 "$CLI" serve "$WORK/store" --port 0 --threads "$THREADS" -q > "$WORK/serve.log" 2>&1 &
@@ -114,19 +118,23 @@ for c in $CONNECTIONS; do
   run_wrk "GET /v1/tiles (blob)" "$WORK/tiles.lua" "$c"
 done
 
-echo "== binary batches of 100k points (POST application/octet-stream), 5 runs"
-for run in 1 2 3 4 5; do
-  # "Expect:" off: time the server, not curl's 100-continue round trip.
-  curl -sf -o "$WORK/lit.bin" -w "%{time_total}\n" -H "Expect:" -H "Content-Type: application/octet-stream" \
-    --data-binary "@$WORK/batch.bin" "$BASE/v1/shadow?method=$METHOD" >> "$WORK/batch_times"
-  [ "$(stat -c %s "$WORK/lit.bin")" -eq 400000 ] || { echo "batch answer has the wrong size" >&2; exit 1; }
-done
-python3 - "$WORK/batch_times" << 'EOF'
+echo "== binary batches of 100k points (POST application/octet-stream), 12 per method on one keep-alive connection"
+for batch_method in $BATCH_METHODS; do
+  urls=()
+  for _ in $(seq 12); do urls+=(-o /dev/null "$BASE/v1/shadow?method=$batch_method"); done
+  # "Expect:" off: time the server, not curl's 100-continue round trip. curl posts the body to every URL.
+  curl -sf -w "%{time_total} %{size_download}\n" -H "Expect:" -H "Content-Type: application/octet-stream" \
+    --data-binary "@$WORK/batch.bin" "${urls[@]}" > "$WORK/batch_times"
+  python3 - "$WORK/batch_times" "$batch_method" << 'EOF'
 import statistics, sys
-times = sorted(float(t) for t in open(sys.argv[1]))
-print(f"{'POST /v1/shadow 100k points':<28} median {statistics.median(times) * 1e3:.1f} ms  best {times[0] * 1e3:.1f} ms"
-      f"   {100000 / statistics.median(times) / 1e6:.2f} M points/s (median)")
+rows = [line.split() for line in open(sys.argv[1])]
+if len(rows) != 12 or any(int(float(size)) != 400000 for _, size in rows):
+    sys.exit(f"batch answers missing or of the wrong size: {rows}")
+times = sorted(float(t) for t, _ in rows[2:])  # the first two open the connection and decode tiles
+print(f"{'POST /v1/shadow 100k ' + sys.argv[2]:<28} median {statistics.median(times) * 1e3:.1f} ms  best {times[0] * 1e3:.1f} ms"
+      f"   {100000 / statistics.median(times) / 1e6:.2f} M points/s (median), {100000 / times[0] / 1e6:.2f} best")
 EOF
+done
 MAX_CONNECTIONS=$("$CLI" serve "$WORK/store" --threads "$THREADS" --print-config 2> /dev/null |
   python3 -c 'import json, sys; print(json.load(sys.stdin)["max_connections"])')
 POINT=$(python3 -c 'import json, sys; b = json.load(open(sys.argv[1]))["shadow"]["world_bounds"]; print("/v1/shadow?x=%.9g&y=%.9g&z=%.9g" % tuple((lo + hi) / 2 for lo, hi in zip(b["min"], b["max"])))' "$WORK/meta.json")
