@@ -91,6 +91,9 @@ int run(int argc, char** argv) {
         std::fflush(stdout);
       }
     }
+    // Decoded bytes this method's tiles hold in the cache (every tile the receivers touch).
+    const uint64_t cached = m.cache_stats().bytes;
+    std::printf("%-6s decoded tiles in cache: %.2f MiB (all methods so far)\n", name.c_str(), double(cached) / (1 << 20));
     if (has_mode("batch")) {
       for (unsigned kernel : {1u, 3u}) {
         double rate[2] = {0, 0};
