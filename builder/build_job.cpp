@@ -19,6 +19,7 @@
 #include "builder/dual_depth_renderer.hpp"
 #include "builder/file_hash.hpp"
 #include "builder/light_space_scene.hpp"
+#include "builder/second_layer_rule.hpp"
 #include "builder/tile_encoder.hpp"
 #include "builder/tile_preview_builder.hpp"
 #include "builder/top_levels.hpp"
@@ -105,6 +106,7 @@ nlohmann::json build_identity(const BuildConfig& config, uint64_t scene_hash, ui
   // Only when set, so stores built before the option existed keep their identity.
   if (config.open_exit_at_far_plane) identity["open_exit_at_far_plane"] = true;
   if (config.cap_exits_at_receiver_surfaces) identity["exit_caps"] = "receiver_surfaces";
+  if (config.receivers != ReceiverContract::anywhere) identity["receivers"] = receiver_contract_name(config.receivers);
   return identity;
 }
 
@@ -287,6 +289,8 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   meta.methods = config.methods;
   meta.default_bias = config.bias_texels * frame->texel_size();
   meta.exit_margin = config.exit_margin_texels * frame->texel_size();
+  meta.receivers = config.receivers;
+  meta.exit_caps = config.cap_exits_at_receiver_surfaces && !config.open_exit_at_far_plane;
 
   // Index: which tiles have triangles; which are done already.
   auto index_start = Clock::now();
@@ -337,6 +341,9 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   depth_options.exit_margin = float(frame->depth_from_world(meta.exit_margin));
   depth_options.open_exit_at_far_plane = config.open_exit_at_far_plane;
   depth_options.cap_exits_at_receiver_surfaces = config.cap_exits_at_receiver_surfaces;
+  depth_options.receivers = config.receivers;
+  depth_options.coplanar_epsilon =
+      float(second_layer::coplanar_epsilon(frame->depth_from_world(meta.default_bias)));
   DualDepthRenderer renderer(*device, light_scene, depth_options);
   TileEncodeOptions encode_options;
   encode_options.construction = config.construction;

@@ -24,6 +24,7 @@
 #include "builder/scene_loader.hpp"
 #include "builder/shard_plan.hpp"
 #include "codec/light_frame.hpp"
+#include "codec/receiver_contract.hpp"
 #include "store/method.hpp"
 #include "common/result.hpp"
 
@@ -48,11 +49,14 @@ struct BuildConfig {
   // Comparison only (stability suite): open surfaces exit at the far plane, the MMH authors' rule
   // that leaks light under open surfaces (DualDepthOptions::open_exit_at_far_plane).
   bool open_exit_at_far_plane = false;
-  // Exits capped by every shadowed surface inside the texel (DualDepthOptions; `build --exit-caps`):
-  // receivers off the texel centre (silhouettes, ridges at a grazing sun) never get more light than
-  // raw gives them. Off by default: it costs size (stability suite, issue #8: nefertiti 2048^2 MH
-  // x1.6, terragen 1024^2 x2.2) and, unoptimised, build time (fzk_haus 8192^2: 9.5 s -> 7 min).
-  bool cap_exits_at_receiver_surfaces = false;
+  // Exits capped by every shadowed surface inside the texel (DualDepthOptions; on by default, off
+  // with `build --no-exit-caps` for the papers' texel-centre intervals): receivers off the texel
+  // centre (silhouettes, ridges at a grazing sun) never get more light than raw gives them. It costs
+  // bytes where exits exist (stability suite, issue #8: nefertiti 2048^2 MH x1.6, terragen 1024^2
+  // x2.2) and little build time since builder 0.3.0.
+  bool cap_exits_at_receiver_surfaces = true;
+  // Which receivers the intervals answer exactly (docs/receiver-contracts.md; `build --receivers`).
+  ReceiverContract receivers = ReceiverContract::anywhere;
   // Scale-out (docs/scale-out.md): build only share `shard->index` of `shard->count` into this
   // store (a shard store for `shadowtiles merge`). The config hash stays the whole build's.
   std::optional<ShardSpec> shard;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "builder/receiver_surface_caps.hpp"
+#include "builder/second_layer_caps.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -25,6 +26,7 @@ struct ClosedHit {
   bool front;
   bool heightfield;
   float slack;  // how much shallower the triangle gets within half a texel (normalised depth)
+  bool open = false;  // an open-mesh hit (collected only under the `surfaces` contract)
 };
 
 // Per-geometry data the filter needs: which solid-bounding triangles face the light, and which
@@ -33,6 +35,7 @@ struct ClosedGeometryData {
   std::vector<uint8_t> front;
   std::vector<uint8_t> heightfield;
   std::vector<float> slack;
+  bool open = false;  // the open meshes' geometry (its hits are collected under `surfaces`)
 };
 
 // Receivers on an exit surface lie anywhere in the texel, not only at its centre: on a surface
@@ -64,7 +67,7 @@ void collect_closed_hits(const RTCFilterFunctionNArguments* args) {
     float t = RTCRayN_tfar(args->ray, args->N, i);
     uint32_t prim = RTCHitN_primID(args->hit, args->N, i);
     (*context->lanes)[lane % kPacket].push_back(
-        {t, prim, data->front[prim] != 0, data->heightfield[prim] != 0, data->slack[prim]});
+        {t, prim, data->front[prim] != 0, data->heightfield[prim] != 0, data->slack[prim], data->open});
     args->valid[i] = 0;
   }
 }
@@ -100,6 +103,7 @@ struct DepthPlane {
 struct TileGeometry {
   std::vector<float> closed_vertices, open_vertices;    // xyz per vertex, 3 vertices per triangle
   ClosedGeometryData closed;                            // closed meshes and heightfields
+  ClosedGeometryData open;                              // open meshes (filter data under `surfaces`)
   std::vector<DepthPlane> closed_planes, open_planes;   // by Embree primitive id
   size_t open_count = 0;
 };
@@ -113,6 +117,7 @@ bool faces_light(const LightSpacePoint& a, const LightSpacePoint& b, const Light
 
 TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile) {
   TileGeometry geometry;
+  geometry.open.open = true;
   const double u0 = double(tile.x) * scene.layout().tile_size();
   const double v0 = double(tile.y) * scene.layout().tile_size();
   const Scene& world = scene.scene();
@@ -139,6 +144,9 @@ TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile) 
       emit(geometry.open_vertices, a);
       emit(geometry.open_vertices, b);
       emit(geometry.open_vertices, c);
+      geometry.open.front.push_back(faces_light(a, b, c) ? 1 : 0);
+      geometry.open.heightfield.push_back(0);
+      geometry.open.slack.push_back(exit_slack(a, b, c));
       geometry.open_planes.push_back(DepthPlane::of(a, b, c));
       ++geometry.open_count;
     }
@@ -219,6 +227,45 @@ DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t
   return interval;
 }
 
+// The `surfaces` contract (docs/receiver-contracts.md): `hits` holds every hit on the ray, closed
+// and open. Upper = the second receiver surface less the margin: the first hit deeper than the first
+// surface by more than the coplanar epsilon that is not inside a closed solid (an exit face is a
+// surface; faces strictly inside a solid, heightfields included, are not receivers). No second
+// surface: upper = 1 (nothing lies beyond the last surface; a query there is off every surface).
+DepthInterval resolve_surfaces_interval(std::vector<ClosedHit>& hits, const DualDepthOptions& options) {
+  const bool use_slack = !options.cap_exits_at_receiver_surfaces;
+  std::sort(hits.begin(), hits.end(), [](const ClosedHit& a, const ClosedHit& b) {
+    return a.open != b.open ? a.open < b.open : a.prim < b.prim;
+  });
+  hits.erase(std::unique(hits.begin(), hits.end(),
+                         [](const ClosedHit& a, const ClosedHit& b) { return a.open == b.open && a.prim == b.prim; }),
+             hits.end());
+  std::sort(hits.begin(), hits.end(), [](const ClosedHit& a, const ClosedHit& b) {
+    return a.t != b.t ? a.t < b.t : a.front > b.front;
+  });
+  DepthInterval interval;  // miss: [1, +inf)
+  if (hits.empty()) return interval;
+  interval.lower = hits.front().t;
+  const float same_surface = float(interval.lower + options.coplanar_epsilon);
+  int solid = 0, closed_solid = 0;  // counters: all solids, closed meshes alone (no heightfields)
+  for (size_t i = 0; i < hits.size(); ++i) {
+    const ClosedHit& hit = hits[i];
+    const int before = solid;
+    if (!hit.open) {
+      solid += hit.front ? 1 : -1;
+      if (!hit.heightfield) closed_solid += hit.front ? 1 : -1;
+    }
+    if (i == 0 || hit.t <= same_surface) continue;  // the first surface, or a coplanar duplicate of it
+    const bool receiver = hit.open ? before <= 0 : (before <= 0 || solid <= 0);
+    if (!receiver) continue;
+    interval.upper = std::max(interval.lower, hit.t - options.exit_margin - (use_slack ? hit.slack : 0.0f));
+    return interval;
+  }
+  // Inside a closed mesh that never exits (inconsistent): stay conservative.
+  interval.upper = closed_solid > 0 ? interval.lower : 1.0f;
+  return interval;
+}
+
 }  // namespace
 
 void DualDepthStats::add(const DualDepthStats& other) {
@@ -235,7 +282,7 @@ DualDepthRenderer::DualDepthRenderer(const EmbreeDevice& device, const LightSpac
                                      DualDepthOptions options)
     : device_(device), scene_(scene), options_(options) {}
 
-Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* stats) const {
+Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepthStats* stats) const {
   const uint32_t size = scene_.layout().tile_size();
   TileIntervals intervals;
   intervals.size = size;
@@ -256,8 +303,10 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
   if (!geometry.closed.front.empty())
     closed_id = attach_triangles(device_.get(), rtc_scene.get(), geometry.closed_vertices, &geometry.closed);
   unsigned open_id = RTC_INVALID_GEOMETRY_ID;
+  const bool surfaces = options_.receivers == ReceiverContract::surfaces;
   if (geometry.open_count)
-    open_id = attach_triangles(device_.get(), rtc_scene.get(), geometry.open_vertices, nullptr);
+    open_id = attach_triangles(device_.get(), rtc_scene.get(), geometry.open_vertices,
+                               surfaces ? &geometry.open : nullptr);
   rtcCommitScene(rtc_scene.get());
   if (RTCError error = rtcGetDeviceError(device_.get()); error != RTC_ERROR_NONE)
     return make_error(ErrorCode::io_error, "embree failed to build the tile BVH (error " +
@@ -304,8 +353,10 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
         float open_t = open_hit ? geometry.open_planes[packet.hit.primID[lane]].at(centre_u, centre_v,
                                                                                   packet.ray.tfar[lane])
                                 : inf;
-        for (ClosedHit& hit : lanes[lane]) hit.t = geometry.closed_planes[hit.prim].at(centre_u, centre_v, hit.t);
-        DepthInterval interval = resolve_interval(lanes[lane], open_t, options_);
+        for (ClosedHit& hit : lanes[lane])
+          hit.t = (hit.open ? geometry.open_planes : geometry.closed_planes)[hit.prim].at(centre_u, centre_v, hit.t);
+        DepthInterval interval = surfaces ? resolve_surfaces_interval(lanes[lane], options_)
+                                          : resolve_interval(lanes[lane], open_t, options_);
         intervals.at(u_start + lane, v) = interval;
         if (interval.lower < 1.0f) ++local.hits;
       }
@@ -313,24 +364,43 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
   }
   (void)closed_id;
   local.ray_seconds = seconds_since(ray_start);
-  const auto cap_start = Clock::now();
-  // Cap every exit by the receiver surfaces inside its texel (see receiver_surface_caps); the
-  // far-plane comparison rule is measured as its authors have it, uncapped.
-  const bool capped = options_.cap_exits_at_receiver_surfaces && !options_.open_exit_at_far_plane;
-  const std::vector<float> caps = capped ? receiver_surface_caps(scene_, tile)
-                                         : std::vector<float>(intervals.texels.size(), std::numeric_limits<float>::infinity());
-  local.exits = 0;
-  for (size_t i = 0; i < intervals.texels.size(); ++i) {
-    DepthInterval& interval = intervals.texels[i];
-    if (interval.upper > interval.lower && interval.lower < 1.0f) {
-      interval.upper = std::max(interval.lower, std::min(interval.upper, caps[i] - options_.exit_margin));
-      local.exits += interval.upper > interval.lower;
-    }
-  }
   local.rays = uint64_t(size) * size;
-  local.cap_seconds = seconds_since(cap_start);
   if (stats) stats->add(local);
   return intervals;
+}
+
+bool DualDepthRenderer::caps_apply() const {
+  // The far-plane comparison rule is measured as its authors have it, uncapped.
+  return options_.cap_exits_at_receiver_surfaces && !options_.open_exit_at_far_plane;
+}
+
+Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* stats) const {
+  DualDepthStats local;
+  auto intervals = render_centre(tile, &local);
+  if (!intervals) return intervals.error();
+  auto cap_start = Clock::now();
+  if (caps_apply() && !scene_.triangles_of(tile).empty()) {
+    // Cap every exit by the receiver surfaces inside its texel (receiver_surface_caps under
+    // `anywhere`, second_layer_caps under `surfaces`).
+    const std::vector<float> caps =
+        options_.receivers == ReceiverContract::surfaces
+            ? second_layer_caps(device_.get(), scene_, tile, options_.coplanar_epsilon, nullptr, &*intervals, options_.exit_margin)
+            : receiver_surface_caps(scene_, tile);
+    apply_exit_caps(*intervals, caps, options_.exit_margin);
+  }
+  local.cap_seconds = seconds_since(cap_start);
+  local.exits = 0;
+  for (const DepthInterval& interval : intervals->texels) local.exits += interval.upper > interval.lower && interval.lower < 1.0f;
+  if (stats) stats->add(local);
+  return intervals;
+}
+
+void apply_exit_caps(TileIntervals& intervals, std::span<const float> caps, float exit_margin) {
+  for (size_t i = 0; i < intervals.texels.size(); ++i) {
+    DepthInterval& interval = intervals.texels[i];
+    if (interval.upper > interval.lower && interval.lower < 1.0f)
+      interval.upper = std::max(interval.lower, std::min(interval.upper, caps[i] - exit_margin));
+  }
 }
 
 }  // namespace shadowtiles

@@ -15,6 +15,9 @@
 //   and a ray that stays inside terrain exits at the far plane less the exit margin (upper =
 //   1 - exit_margin: receivers beyond the far plane are queried as on it);
 // - no hit: [1, +inf), fully lit.
+// Under the `surfaces` receiver contract (docs/receiver-contracts.md) every hit is collected, open
+// ones too: upper = the second receiver surface less the margin, for any mesh; with caps, capped by
+// the second layer inside the texel's square (second_layer_caps).
 // The tile's BVH holds only the tile's triangles, in tile-local light space (x, y in texels from the
 // tile corner, z = normalised depth), so float precision is relative to the tile, not the world.
 // Each hit's depth is then re-evaluated in double from the hit triangle's global light-space plane,
@@ -25,10 +28,12 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 
 #include "builder/depth_interval.hpp"
 #include "builder/embree_device.hpp"
 #include "builder/light_space_scene.hpp"
+#include "codec/receiver_contract.hpp"
 
 namespace shadowtiles {
 
@@ -39,7 +44,7 @@ struct DualDepthStats {
   uint64_t triangles = 0;      // in the tile's BVH
   double bvh_seconds = 0;
   double ray_seconds = 0;  // the ray casting alone (packets, counter walk)
-  double cap_seconds = 0;  // the exit-cap pass (receiver_surface_caps), when on
+  double cap_seconds = 0;  // the exit-cap pass (receiver_surface_caps / second_layer_caps), when on
 
   void add(const DualDepthStats& other);
 };
@@ -57,6 +62,10 @@ struct DualDepthOptions {
   // of the centre-ray rule; the build job turns it on (BuildConfig::cap_exits_at_receiver_surfaces).
   // Conservative: a back face inside another closed mesh (intersecting solids) also caps.
   bool cap_exits_at_receiver_surfaces = false;
+  // Which receivers the intervals answer exactly (anywhere: today's rule; surfaces: see above).
+  ReceiverContract receivers = ReceiverContract::anywhere;
+  // `surfaces`: surfaces closer than this (normalised depth) are one (second_layer::coplanar_epsilon).
+  float coplanar_epsilon = 1e-6f;
 };
 
 class DualDepthRenderer {
@@ -65,11 +74,19 @@ class DualDepthRenderer {
 
   // Renders `tile` of the layout; a tile without triangles returns all misses without tracing.
   Result<TileIntervals> render(TileCoord tile, DualDepthStats* stats = nullptr) const;
+  // The texel-centre intervals alone: the exit caps not applied (though, with caps on, without the
+  // slack term the caps replace). verify applies its own brute-force caps to these.
+  Result<TileIntervals> render_centre(TileCoord tile, DualDepthStats* stats = nullptr) const;
+  // Whether render() applies exit caps (on, and not the far-plane comparison rule).
+  bool caps_apply() const;
 
  private:
   const EmbreeDevice& device_;
   const LightSpaceScene& scene_;
   DualDepthOptions options_;
 };
+
+// upper = max(lower, min(upper, cap - margin)) for every hit texel with an exit (caps per texel, row-major).
+void apply_exit_caps(TileIntervals& intervals, std::span<const float> caps, float exit_margin);
 
 }  // namespace shadowtiles

@@ -8,16 +8,23 @@
 
 #include "builder/dual_depth_renderer.hpp"
 #include "builder/light_space_scene.hpp"
+#include "builder/reference_caps.hpp"
+#include "builder/second_layer_rule.hpp"
 #include "codec/cpvs_format.hpp"
 
 namespace shadowtiles {
 namespace {
 
-void check_tile(const TileIntervals& intervals, const DecodedTile* tile, TileCoord coord, MethodVerification& out) {
+// `ulps`: how many float steps above a capped upper bound a value may lie (the brute-force caps and
+// the build's fast caps round differently; see kCapUlps).
+void check_tile(const TileIntervals& intervals, const DecodedTile* tile, TileCoord coord, unsigned ulps,
+                MethodVerification& out) {
   ++out.tiles;
   for (uint32_t v = 0; v < intervals.size; ++v)
     for (uint32_t u = 0; u < intervals.size; ++u) {
-      const DepthInterval& interval = intervals.at(u, v);
+      DepthInterval interval = intervals.at(u, v);
+      for (unsigned k = 0; k < ulps && std::isfinite(interval.upper) && interval.upper > interval.lower; ++k)
+        interval.upper = std::nextafter(interval.upper, 2.0f);
       float value = tile ? tile->value(u, v) : std::numeric_limits<float>::infinity();
       ++out.texels;
       if (!interval.contains(value)) {
@@ -71,15 +78,26 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
   auto device = EmbreeDevice::create();
   if (!device) return device.error();
   LightSpaceScene light_scene(scene, map.frame(), map.layout());
+  const StoreMeta& meta = map.meta();
   DualDepthOptions options;
-  options.exit_margin = float(map.frame().depth_from_world(map.meta().exit_margin));
+  options.exit_margin = float(map.frame().depth_from_world(meta.exit_margin));
+  options.receivers = meta.receivers;
+  options.cap_exits_at_receiver_surfaces = meta.exit_caps;
+  const double coplanar_epsilon = second_layer::coplanar_epsilon(map.frame().depth_from_world(meta.default_bias));
+  options.coplanar_epsilon = float(coplanar_epsilon);
   DualDepthRenderer renderer(*device, light_scene, options);
+  // The build rounds its fast caps to float after exact clipping in another order than the
+  // reference: a value may sit a float step or two above the reference's bound (~1e-7 of the depth
+  // range, far inside the exit margin less the bias that receivers rely on).
+  const unsigned cap_ulps = meta.exit_caps ? kCapUlps : 0;
 
   std::vector<TileCoord> tiles;
   for (uint64_t i = 0; i < map.layout().tile_count(); ++i) tiles.push_back(TileLayout::from_morton_index(i));
 
   const uint32_t cpvs_steps = cpvs::depth_steps_for(map.layout().resolution(), map.layout().tile_size());
   VerifyReport report;
+  report.receivers = meta.receivers;
+  report.exit_caps = meta.exit_caps;
   for (store::Method m : methods) report.methods[m];
   std::mutex mutex;
   std::optional<Error> error;
@@ -93,12 +111,18 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
         std::lock_guard lock(mutex);
         if (error) return;
       }
-      auto intervals = renderer.render(tiles[i]);
+      // Texel-centre intervals from the ray caster, capped by the brute-force reference (not the
+      // build's cap pass) when the store was built with exit caps.
+      auto intervals = renderer.render_centre(tiles[i]);
       if (!intervals) {
         std::lock_guard lock(mutex);
         error = intervals.error();
         return;
       }
+      ReferenceCapStats cap_stats;
+      if (meta.exit_caps)
+        apply_reference_caps(light_scene, tiles[i], meta.receivers, coplanar_epsilon, options.exit_margin, *intervals,
+                             &cap_stats);
       std::map<store::Method, MethodVerification> local;
       for (store::Method m : methods) {
         auto tile = map.tile(m, tiles[i]);
@@ -110,7 +134,7 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
         if (m == store::Method::cpvs)
           check_cpvs_tile(*intervals, tile->get(), tiles[i], cpvs_steps, local[m]);
         else
-          check_tile(*intervals, tile->get(), tiles[i], local[m]);
+          check_tile(*intervals, tile->get(), tiles[i], cap_ulps, local[m]);
       }
       std::lock_guard lock(mutex);
       for (auto& [m, v] : local) {
@@ -122,6 +146,7 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
         total.tiles += v.tiles;
       }
       ++report.tiles_checked;
+      report.reference_cap_texels += cap_stats.texels;
       if (progress) progress(++done, tiles.size());
     }
   };

@@ -13,7 +13,8 @@ namespace shadowtiles::cli {
 namespace {
 
 struct BuildFlags {
-  std::string scene, out, sun, light_dir, methods = "dagmh", up = "z", construction = "bottom-up", shard;
+  std::string scene, out, sun, light_dir, methods = "dagmh", up = "z", construction = "bottom-up", shard,
+              receivers = "anywhere";
   uint32_t plan_shards = 0;
   uint32_t resolution = 0;
   double texel_size = 0;
@@ -21,7 +22,7 @@ struct BuildFlags {
   unsigned threads = 2;
   std::vector<std::string> heightfields;
   double bias_texels = 2.0, exit_margin_texels = 4.0;
-  bool overwrite = false, json = false, exit_caps = false;
+  bool overwrite = false, json = false, exit_caps = true;
   uint64_t kill_after = 0;
 };
 
@@ -60,6 +61,9 @@ int run(const BuildFlags& flags) {
   config.exit_margin_texels = flags.exit_margin_texels;
   config.overwrite = flags.overwrite;
   config.cap_exits_at_receiver_surfaces = flags.exit_caps;
+  auto receivers = parse_receiver_contract(flags.receivers);
+  if (!receivers) { spdlog::error("--receivers must be anywhere or surfaces"); return kInvalidInput; }
+  config.receivers = *receivers;
   config.debug_kill_after_tiles = flags.kill_after;
   if (!flags.shard.empty()) {
     auto shard = parse_shard_spec(flags.shard);
@@ -127,9 +131,16 @@ void add_build_command(CLI::App& app, int& exit_code) {
                   "Closed-mesh exits pulled back by this many texel widths (>= bias)")->capture_default_str();
   cmd->add_option("--mh-construction", flags->construction, "MH family: bottom-up or top-down (SBE16a Alg. 1)")
       ->capture_default_str();
-  cmd->add_flag("--exit-caps", flags->exit_caps,
-                "Cap exits by every shadowed surface inside the texel: receivers off the texel centre never get "
-                "more light than raw gives them; larger stores, much slower builds (STABILITY.md)");
+  cmd->add_option("--receivers", flags->receivers,
+                  "Receiver contract: anywhere (a query point may be anywhere outside closed solids) or surfaces "
+                  "(query points lie on the scene's surfaces: any depth up to the second surface answers them, "
+                  "so open meshes compress; docs/receiver-contracts.md)")
+      ->capture_default_str();
+  cmd->add_flag("--exit-caps,!--no-exit-caps", flags->exit_caps,
+                "Exit caps (default on): cap each texel's upper bound by the shadowed surfaces inside its square, "
+                "so receivers off the texel centre never get more light than raw gives them. --no-exit-caps "
+                "stores the papers' texel-centre intervals (smaller where exits exist; leaks at silhouettes "
+                "and ridges, STABILITY.md finding 1)");
   cmd->add_flag("--overwrite", flags->overwrite, "Replace a different build in --out");
   cmd->add_flag("--json", flags->json, "Print the build summary as JSON");
   cmd->add_option("--debug-kill-after-tiles", flags->kill_after, "Test hook: SIGKILL self after N tiles")

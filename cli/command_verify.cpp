@@ -39,6 +39,12 @@ int run(const VerifyFlags& flags) {
   auto report = verify_store(**map, *scene, methods, flags.threads);
   if (!report) { spdlog::error("verify failed: {}", report.error().message); return exit_code_for(report.error()); }
   nlohmann::json out = nlohmann::json::object();
+  out["receivers"] = receiver_contract_name(report->receivers);
+  out["exit_caps"] = report->exit_caps;
+  if (!flags.json)
+    std::printf("receivers %s, exit caps %s (brute-force reference over %llu texels)\n",
+                receiver_contract_name(report->receivers), report->exit_caps ? "on" : "off",
+                (unsigned long long)report->reference_cap_texels);
   for (const auto& [method, v] : report->methods) {
     out[store::method_name(method)] = {{"tiles", v.tiles}, {"texels", v.texels}, {"outside", v.outside},
                                        {"wrong_answers", v.wrong_answers}};

@@ -60,6 +60,8 @@ nlohmann::json StoreMeta::to_json() const {
       {"methods", methods_json},
       {"default_bias", default_bias},
       {"exit_margin", exit_margin},
+      {"receivers", receiver_contract_name(receivers)},
+      {"exit_caps", exit_caps},
       {"build_stats", build_stats},
   };
   if (shard)
@@ -171,6 +173,19 @@ Result<StoreMeta> StoreMeta::from_json(const nlohmann::json& json) {
     if (*count < 1 || *index >= *count || *begin > *end)
       return make_error(ErrorCode::corrupt_data, "meta: shard index, count or range out of order");
     meta.shard = ShardInfo{*index, *count, *begin, *end, *tiles, *work, *done, *level};
+  }
+  if (json.contains("receivers")) {
+    auto name = field<std::string>(json, "receivers");
+    if (!name) return name.error();
+    auto contract = parse_receiver_contract(*name);
+    if (!contract)
+      return make_error(ErrorCode::unsupported, "meta: receiver contract '" + *name + "' is not supported");
+    meta.receivers = *contract;
+  }
+  if (json.contains("exit_caps")) {
+    auto caps = field<bool>(json, "exit_caps");
+    if (!caps) return caps.error();
+    meta.exit_caps = *caps;
   }
 
   // The frame and layout must be constructible, or every lookup would fail later.

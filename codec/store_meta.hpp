@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "codec/light_frame.hpp"
+#include "codec/receiver_contract.hpp"
 #include "codec/tile_layout.hpp"
 #include "store/method.hpp"
 #include "common/result.hpp"
@@ -59,6 +60,10 @@ struct StoreMeta {
   std::vector<store::Method> methods;
   double default_bias = 0;  // world units
   double exit_margin = 0;   // world units the builder pulled exits back by
+  // Which receivers the intervals answer exactly; absent in stores built before contracts: anywhere.
+  ReceiverContract receivers = ReceiverContract::anywhere;
+  // Exits capped by the receiver surfaces inside each texel (absent in older stores: false).
+  bool exit_caps = false;
   nlohmann::json build_stats = nlohmann::json::object();
   // Set only in a shard store, whose `complete` stays false: it answers for its share alone.
   std::optional<ShardInfo> shard;

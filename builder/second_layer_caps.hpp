@@ -1,0 +1,47 @@
+// Exit caps of the `surfaces` receiver contract (docs/receiver-contracts.md): per texel, the
+// shallowest depth, inside the texel's square, of the scene's second layer, the parts of surfaces
+// that lie behind another surface (by more than the coplanar epsilon) along the light. Every
+// receiver a shadow map must shadow lies there, so an upper bound of cap - margin keeps every one of
+// them shadowed, wherever it sits in the texel. Any mesh counts, closed or not: a closed mesh's back
+// faces are behind its front faces; a floor under a one-sided roof is behind the roof.
+//
+// How: triangle pairs whose footprints overlap (Embree's rtcCollide on their boxes, each pair once) give
+// the convex region of T behind T': T clipped by T''s edges and by z_T - z_T' >= epsilon, exactly in
+// double. Each region's triangle fan lowers the caps of the texels it touches through
+// lower_caps_by_triangle (exact per-texel clipping, closed form inside). The occluder's edges are
+// widened by 2^-20 texels and the epsilon narrowed by 2^-20 of itself so that the region found here
+// contains the exact one despite rounding: the caps are never above verify's brute-force reference.
+// Edge-on triangles (second_layer::edge_on) cover no area: they hide nothing and cap by their own
+// shallowest point.
+// Thread safety: pure function.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <embree3/rtcore.h>
+
+#include "builder/depth_interval.hpp"
+#include "builder/light_space_scene.hpp"
+#include "builder/receiver_surface_caps.hpp"
+
+namespace shadowtiles {
+
+struct SecondLayerCapCounts {
+  uint64_t pairs_tested = 0;   // footprint-overlapping pairs that passed the depth test
+  uint64_t regions = 0;        // non-empty regions behind another triangle
+  uint64_t skipped = 0;        // pairs or regions that could not change a capped interval
+  ReceiverCapCounts texels;    // how the regions' texels were resolved
+};
+
+// The cap per texel of `tile` (+inf where no second layer lies in the square); `coplanar_epsilon` in
+// normalised depth (second_layer::coplanar_epsilon).
+// With `intervals` (the tile's centre intervals) and the exit margin, regions that cannot change
+// apply_exit_caps' result anywhere in their box are skipped: float(shallowest) - margin >= every
+// texel's upper there (texels without an exit have nothing to cap). The caps are then exact only
+// where they matter; apply_exit_caps gives the same intervals as with every region.
+std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
+                                     SecondLayerCapCounts* counts = nullptr, const TileIntervals* intervals = nullptr,
+                                     float exit_margin = 0);
+
+}  // namespace shadowtiles
