@@ -1,7 +1,16 @@
 // Raw tile payload (method `raw`): the tile's lower-bound depth map as float32, the reference every
 // compressed method is measured against.
-// FORMAT (little-endian): u32 tile size T, then T*T float32 row-major (texel (u, v) at v*T + u).
-// Parsing checks the size against the payload length: safe on untrusted input.
+// FORMAT (little-endian), version 1, a 12-byte header then the texels:
+//   offset  0  magic "STRW"             4 bytes
+//   offset  4  format_version           u16 (kRawTileFormatVersion)
+//   offset  6  reserved                 u16, 0
+//   offset  8  tile size T              u32, a power of two <= 16384
+//   offset 12  T*T float32 row-major (texel (u, v) at v*T + u), every value finite
+// Payloads written before the header (version 0: u32 T, then the texels) are still read: their
+// first word is a power of two, which the magic never is.
+// Parsing checks magic, version, reserved bits, size against the payload length and that every
+// value is finite (the builder stores lower bounds of normalised depth; misses are 1, never inf):
+// corrupt_data otherwise, unsupported for a newer version. Safe on untrusted input.
 // Thread safety: RawTileView is immutable after parse.
 #pragma once
 
@@ -13,6 +22,12 @@
 
 namespace shadowtiles {
 
+inline constexpr uint8_t kRawTileMagic[4] = {'S', 'T', 'R', 'W'};  // FORMAT
+inline constexpr uint16_t kRawTileFormatVersion = 1;                // FORMAT
+inline constexpr size_t kRawTileHeaderSize = 12;                    // FORMAT
+inline constexpr uint32_t kRawTileMaxSize = 1u << 14;
+
+// Precondition: lower.size() == size * size, size a power of two <= kRawTileMaxSize.
 std::vector<uint8_t> encode_raw_tile(uint32_t size, std::span<const float> lower);
 
 class RawTileView {
