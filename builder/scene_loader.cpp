@@ -265,7 +265,14 @@ Status check_ply(const std::filesystem::path& file, uint64_t file_size) {
   while (pos < head.size()) {
     size_t end = head.find('\n', pos);
     if (end == std::string::npos) break;
-    const auto words = split_words(std::string_view(head).substr(pos, end - pos));
+    const std::string_view line = std::string_view(head).substr(pos, end - pos);
+    // assimp splits header words on spaces and tabs only and ends lines at \r, \n, \f or NUL: a
+    // line "end_header\v..." passes a check that splits on isspace, then makes assimp 5.2 seek
+    // for ever (found by fuzz_scene_loader). The header is text: refuse any other control byte.
+    for (char c : line)
+      if ((static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\r') || c == 0x7f)
+        return fail(fmt::format("control character 0x{:02x} in the header", static_cast<unsigned char>(c)));
+    const auto words = split_words(line);
     pos = end + 1;
     if (words.empty()) continue;
     if (words[0] == "format" && words.size() > 1) {

@@ -400,6 +400,29 @@ TEST(SceneLoaderErrors, CountsBeyondTheFileSizeAreRejectedUpFront) {
   EXPECT_EQ(load_ok(dir.path() / "ok.off").triangle_count(), 1u);
 }
 
+TEST(SceneLoaderErrors, ControlCharacterInPlyHeaderIsRefused) {
+  // fuzz_scene_loader regression: "end_header" followed by a vertical tab passed the header check
+  // (isspace) while assimp 5.2 never saw the header end and seeked for ever.
+  TempDir dir;
+  const std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  for (const std::string& bad : {std::string("\v"), std::string("\f"), std::string(1, '\0'), std::string("\x01")}) {
+    std::string file = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                       "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header";
+    file += bad;
+    file += body;
+    write_file(dir.path() / "vtab.ply", file);
+    auto scene = load_scene(dir.path() / "vtab.ply", {});
+    ASSERT_FALSE(scene.ok());
+    EXPECT_EQ(scene.error().code, ErrorCode::invalid_input);
+    EXPECT_NE(scene.error().message.find("control character"), std::string::npos) << scene.error().message;
+  }
+  // The same file with a plain newline still loads.
+  write_file(dir.path() / "ok.ply",
+             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+             "element face 1\nproperty list uchar int vertex_indices\nend_header\r\n" + body);
+  EXPECT_EQ(load_ok(dir.path() / "ok.ply").triangle_count(), 1u);
+}
+
 TEST(SceneLoaderErrors, AssimpErrorMessageIsPassedOn) {
   auto scene = load_scene(assimp_model("invalid/malformed.obj"), {});
   ASSERT_FALSE(scene.ok());
