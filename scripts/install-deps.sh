@@ -19,6 +19,7 @@ packages=(
   chromium nodejs          # the inspector's real-browser test (tests/browser), headless
   slurmctld slurmd slurm-client munge  # scale-out: the Slurm integration test (tests/slurm_array_test.sh)
   nginx                    # serving replicas behind a caching proxy (config/nginx-replicas.conf)
+  clang libclang-rt-14-dev # libFuzzer + ASan/UBSan runtimes for the fuzz targets (scripts/fuzz.sh)
 )
 # npm for playwright-core (tests/browser/package.json); a node distribution that ships npm itself
 # (NodeSource) conflicts with Debian's npm package.

@@ -7,3 +7,7 @@ bash scripts/install-deps.sh
 bash scripts/build.sh
 # Long variants (label `long`: every scene at high resolution) run with `ctest --test-dir build -L long`.
 ctest --test-dir build --output-on-failure -j 2 --timeout 900 -LE long
+# Fuzzing, CI mode: every libFuzzer target (fuzz/) 100,000 executions under ASan + UBSan, after
+# replaying the committed crash inputs; its own clang build in build-fuzz/. The long mode (10^6 per
+# target) is the ctest test fuzz_long (label `long`).
+bash scripts/fuzz.sh --ci

@@ -123,6 +123,11 @@ bool HttpService::process_and_close_socket(socket_t sock) {
   return true;
 }
 
+void HttpService::serve_socket(int fd) {
+  ConnectionStream stream(fd, policy_.limits);
+  serve(stream);
+}
+
 void HttpService::serve(ConnectionStream& stream) {
   t_current = &stream;
   const unsigned max_requests = policy_.keep_alive_max_count;

@@ -46,6 +46,11 @@ class HttpService : public httplib::Server {
   // Called from a handler: close the connection after this response (its body was not read).
   static void close_after_response();
 
+  // Serves one already-connected socket on the calling thread, as an I/O thread does but outside
+  // the connection caps, until the client is done or a deadline ends it. The caller closes `fd`.
+  // For the HTTP fuzz target (fuzz/fuzz_http.cpp), which feeds requests through a socketpair.
+  void serve_socket(int fd);
+
  private:
   bool process_and_close_socket(socket_t sock) override;
   void serve(ConnectionStream& stream);

@@ -349,6 +349,8 @@ std::string Server::build_id() const {
   return map ? map->meta().config_hash : std::string();
 }
 
+void Server::serve_connection(int fd) { impl_->http.serve_socket(fd); }
+
 Status Server::run() {
   if (impl_->stop_requested.load()) return {};
   if (!impl_->http.listen_after_bind() && !impl_->stop_requested.load())

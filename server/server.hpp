@@ -58,6 +58,11 @@ class Server {
   // The served build's id (meta config_hash), empty before one is open.
   std::string build_id() const;
 
+  // Serves one already-connected socket on the calling thread, with every route, limit and deadline
+  // of run() but outside the connection caps; returns when the client is done. The caller closes
+  // `fd`. For fuzz/fuzz_http.cpp (hostile bytes through a socketpair, no listener thread).
+  void serve_connection(int fd);
+
   // Blocks until stop(); returns at once if stop() was already called.
   Status run();
   // Stops accepting; run() returns once accepted connections are done. Idempotent. A stop() racing
