@@ -1,6 +1,7 @@
 #include "store/lmdb_store.hpp"
 
 #include <lmdb.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -152,6 +153,19 @@ Store::~Store() {
 }
 
 Error Store::lmdb_error(const char* what, int rc) const {
+  // A full file system often reaches LMDB as a short write, which it reports as EIO, not ENOSPC.
+  // Name the real cause when the store's file system has (next to) nothing left.
+  if (rc == EIO || rc == ENOSPC || rc == EDQUOT) {
+    struct statvfs fs {};
+    if (::statvfs(path_.c_str(), &fs) == 0) {
+      const uint64_t free_bytes = uint64_t(fs.f_bavail) * fs.f_frsize;
+      if (rc != EIO || free_bytes < (uint64_t{1} << 20))
+        return make_error(ErrorCode::out_of_space,
+                          "store " + path_.string() + ": " + what + ": the disk is full (" +
+                              std::to_string(free_bytes) + " bytes free on its file system; " + mdb_strerror(rc) +
+                              "); the store keeps every committed record: free space and rerun to resume");
+    }
+  }
   return make_error(code_for(rc),
                     std::string("store ") + path_.string() + ": " + what + ": " + mdb_strerror(rc));
 }
