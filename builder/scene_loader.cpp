@@ -189,7 +189,8 @@ Result<Scene> convert(const aiScene& ai, const std::filesystem::path& file, Heig
         return too_big(file);
       const std::string mesh_name(mesh.mName.C_Str());
       std::string name = instance_name(node_name, mesh_name, stem);
-      if (const int n = ++name_count[name]; n > 1) name += "#" + std::to_string(n);
+      // fmt, not string operator+: GCC 12 reports a false -Wrestrict on the latter here.
+      if (const int n = ++name_count[name]; n > 1) name += fmt::format("#{}", n);
       (void)scene.add_mesh(name, vertices, triangles, matcher.match(name, node_name, mesh_name));
       scene.meshes.back().dropped_triangles += polygons;
     }
