@@ -30,7 +30,8 @@ using Clock = std::chrono::steady_clock;
 using testing::TempDir;
 
 // Every record a build writes per tile, and the trees merged from them (meta holds timings).
-constexpr store::Database kCompared[] = {store::Database::tiles, store::Database::top, store::Database::preview};
+constexpr store::Database kCompared[] = {store::Database::tiles, store::Database::top, store::Database::preview,
+                                         store::Database::tileinfo};
 
 std::map<std::string, std::string> records(const std::filesystem::path& dir, store::Database db) {
   std::map<std::string, std::string> out;
