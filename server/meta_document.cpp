@@ -60,6 +60,9 @@ nlohmann::json meta_document(const ShadowMap& map) {
         {"tiles_by_method", tiles_by_method},
         {"default_bias", meta.default_bias},
         {"exit_margin", meta.exit_margin},
+        // Which query points the answers are exact for (docs/receiver-contracts.md).
+        {"receivers", receiver_contract_name(meta.receivers)},
+        {"exit_caps", meta.exit_caps},
         {"build_stats", meta.build_stats}}},
   };
 }

@@ -16,6 +16,10 @@ namespace {
 
 constexpr const char* kBinaryType = "application/octet-stream";
 
+// Every answer names the store's receiver contract (docs/receiver-contracts.md): under `surfaces` a
+// point off every surface gets only a bounded answer, so a caller must be able to tell.
+const char* receivers_of(const ShadowMap& map) { return receiver_contract_name(map.meta().receivers); }
+
 bool require_map(const ServiceState& state, httplib::Response& res) {
   if (state.map()) return true;
   send_error(res, 503, "not_ready", "the store is not open yet");
@@ -49,6 +53,7 @@ void get_shadow(ServiceState& state, const httplib::Request& req, httplib::Respo
              {"v", finite_or_null(a.light.v)},
              {"depth", finite_or_null(a.light.depth)},
              {"method", store::method_name(query->method)},
+             {"receivers", receivers_of(map)},
              {"pcf", query->pcf == 0 ? 1u : query->pcf}});
 }
 
@@ -78,6 +83,7 @@ void post_json(ServiceState& state, const ShadowMap& map, const httplib::Request
              {"outside_map", result->outside},
              {"count", batch->points.size()},
              {"method", store::method_name(query->method)},
+             {"receivers", receivers_of(map)},
              {"pcf", query->pcf == 0 ? 1u : query->pcf}});
 }
 
@@ -112,6 +118,7 @@ void post_binary(ServiceState& state, const ShadowMap& map, const httplib::Reque
   }
   res.status = 200;
   res.set_header("X-Shadow-Outside-Map", std::to_string(result->outside.size()));
+  res.set_header("X-Shadow-Receivers", receivers_of(map));
   res.set_content(std::move(body), kBinaryType);
 }
 

@@ -3,7 +3,14 @@
 // store whose intervals were not capped as its meta claims.
 #include <gtest/gtest.h>
 
+#include <thread>
+
+#include <httplib.h>
+
+#include "client/http_tile_source.hpp"
+#include "client/shadow_map.hpp"
 #include "codec/store_meta.hpp"
+#include "server/server.hpp"
 #include "store/lmdb_store.hpp"
 
 #include "receiver_contracts_scenes.hpp"
@@ -49,6 +56,72 @@ TEST(ReceiverContracts, ContractIsInTheMetaAndTheBuildIdentity) {
   EXPECT_EQ(run_command(base + " --receivers anywhere 2>&1", &output), 2) << output;
   EXPECT_NE(output.find("different build"), std::string::npos) << output;
   EXPECT_EQ(run_command(base + " --receivers elsewhere 2>&1", &output), 2) << output;
+}
+
+TEST(ReceiverContracts, MetaWithoutTheFieldReadsAsAnywhereAndUnknownContractsAreRefused) {
+  TempDir dir;
+  const std::string cli = cli_path().string();
+  ASSERT_EQ(run_command(cli + " build " + shared_scene(kHaus.file).string() +
+                        " --up y --resolution 256 --tile 256 --method raw --receivers surfaces --out " +
+                        (dir.path() / "s").string() + " 2>/dev/null"),
+            0);
+  auto map = ShadowMap::open(dir.path() / "s");
+  ASSERT_TRUE(map.ok()) << map.error().message;
+  nlohmann::json json = (*map)->meta().to_json();
+  EXPECT_EQ(json["receivers"], "surfaces");
+  json.erase("receivers");
+  json.erase("exit_caps");
+  auto old = StoreMeta::from_json(json);  // a store built before contracts
+  ASSERT_TRUE(old.ok()) << old.error().message;
+  EXPECT_EQ(old->receivers, ReceiverContract::anywhere);
+  EXPECT_FALSE(old->exit_caps);
+  json["receivers"] = "elsewhere";
+  EXPECT_FALSE(StoreMeta::from_json(json).ok());
+}
+
+TEST(ReceiverContracts, ServerAnswersAndTheHttpClientNameTheContract) {
+  TempDir dir;
+  const std::string cli = cli_path().string();
+  const auto store_dir = dir.path() / "s";
+  ASSERT_EQ(run_command(cli + " build " + shared_scene(kHaus.file).string() +
+                        " --up y --resolution 256 --tile 256 --method raw,dagmh --receivers surfaces --out " +
+                        store_dir.string() + " 2>/dev/null"),
+            0);
+  server::ServerConfig config;
+  config.port = 0;
+  auto bound = server::Server::bind(config);
+  ASSERT_TRUE(bound.ok()) << bound.error().message;
+  std::unique_ptr<server::Server> server = std::move(*bound);
+  ASSERT_TRUE(server->attach_store(store_dir).ok());
+  std::thread runner([&] { EXPECT_TRUE(server->run().ok()); });
+  httplib::Client client("127.0.0.1", server->port());
+  client.set_read_timeout(20, 0);
+  for (int i = 0; i < 200 && !client.Get("/healthz"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+
+  auto meta = client.Get("/v1/meta");
+  ASSERT_TRUE(meta && meta->status == 200);
+  auto meta_json = nlohmann::json::parse(meta->body);
+  EXPECT_EQ(meta_json["shadow"]["receivers"], "surfaces");
+  EXPECT_EQ(meta_json["shadow"]["exit_caps"], true);
+  auto point = client.Get("/v1/shadow?x=5&y=2&z=-5");
+  ASSERT_TRUE(point && point->status == 200) << (point ? point->body : "no answer");
+  EXPECT_EQ(nlohmann::json::parse(point->body)["receivers"], "surfaces");
+  auto batch = client.Post("/v1/shadow", R"({"points": [[5, 2, -5], [0, 0, 0]]})", "application/json");
+  ASSERT_TRUE(batch && batch->status == 200) << (batch ? batch->body : "no answer");
+  EXPECT_EQ(nlohmann::json::parse(batch->body)["receivers"], "surfaces");
+  std::string binary(12, '\0');
+  auto binary_answer = client.Post("/v1/shadow", binary, "application/octet-stream");
+  ASSERT_TRUE(binary_answer && binary_answer->status == 200);
+  EXPECT_EQ(binary_answer->get_header_value("X-Shadow-Receivers"), "surfaces");
+  // The streaming client learns the contract from the build record it fetches.
+  auto source = HttpTileSource::open("http://127.0.0.1:" + std::to_string(server->port()), {});
+  ASSERT_TRUE(source.ok()) << source.error().message;
+  auto remote = ShadowMap::open(*source, {});
+  ASSERT_TRUE(remote.ok()) << remote.error().message;
+  EXPECT_EQ((*remote)->meta().receivers, ReceiverContract::surfaces);
+  remote->reset();
+  server->stop();
+  runner.join();
 }
 
 // Rewrites the store's meta field `exit_caps` (the record is JSON under key "build").
