@@ -5,6 +5,10 @@ decoded in memory: 34 GB at 64K^2, more than the machine has).
 
     python3 bench/build_sizes.py --config config/bench-standard.json --resolution 65536 \
         --methods mh,mmh,dagmh --out out/sizes-64k.json [--scenes a,b] [--cli build/cli/shadowtiles]
+        [--receivers anywhere,surfaces]
+
+With --receivers, every scene is built once per receiver contract (docs/receiver-contracts.md) and
+each entry records its contract; bench/contract_sizes.py turns such a run into the two-contract table.
 
 One `shadowtiles build --json` per scene (same sun, up axis and heightfield flags as the bench),
 the store deleted afterwards. The output is rewritten after every scene and scenes already in it
@@ -27,6 +31,7 @@ def main():
     ap.add_argument("--out", required=True, help="JSON file to write (and resume from)")
     ap.add_argument("--scenes", default="", help="only these scenes (comma-separated names)")
     ap.add_argument("--cli", default="build/cli/shadowtiles", help="the shadowtiles executable")
+    ap.add_argument("--receivers", default="anywhere", help="receiver contracts to build, comma-separated")
     ap.add_argument("--work", default="out/build-sizes-store", help="scratch store directory")
     args = ap.parse_args()
 
@@ -43,19 +48,20 @@ def main():
     if os.path.exists(args.out):
         with open(args.out) as f:
             doc = json.load(f)
-    done = {(s["scene"], s["resolution"]) for s in doc["scenes"]}
+    done = {(s["scene"], s["resolution"], s.get("receivers", "anywhere")) for s in doc["scenes"]}
 
-    for scene in config["scenes"]:
+    for scene, receivers in [(s, r) for s in config["scenes"] for r in args.receivers.split(",")]:
         name = scene["name"]
-        if (wanted and name not in wanted) or (name, args.resolution) in done:
+        if (wanted and name not in wanted) or (name, args.resolution, receivers) in done:
             continue
         cmd = [args.cli, "-q", "build", os.path.join(root, scene["file"]), "-o", args.work, "--overwrite", "--json",
                "-r", str(args.resolution), "--tile", str(min(config.get("tile_size", 4096), args.resolution)),
                "-j", str(config.get("build_threads", 2)), "-m", args.methods, "--up", scene.get("up", "z"),
-               "--sun", ",".join(str(x) for x in scene.get("sun", [135, 45]))]
+               "--sun", ",".join(str(x) for x in scene.get("sun", [135, 45])),
+               "--receivers", receivers]
         for mesh in scene.get("heightfield", []):
             cmd += ["--heightfield", mesh]
-        print(f"{name} {args.resolution}^2: {' '.join(cmd)}", flush=True)
+        print(f"{name} {args.resolution}^2 {receivers}: {' '.join(cmd)}", flush=True)
         start = time.time()
         result = subprocess.run(cmd, capture_output=True, text=True)
         shutil.rmtree(args.work, ignore_errors=True)
@@ -63,7 +69,8 @@ def main():
             sys.exit(f"build of {name} failed ({result.returncode}):\n{result.stderr}")
         stats = json.loads(result.stdout)
         stats = stats.get("stats", stats)
-        entry = {"scene": name, "resolution": args.resolution, "wall_s": time.time() - start, "stats": stats}
+        entry = {"scene": name, "resolution": args.resolution, "receivers": receivers, "wall_s": time.time() - start,
+                 "stats": stats}
         doc["scenes"].append(entry)
         with open(args.out + ".tmp", "w") as f:
             json.dump(doc, f, indent=1)
