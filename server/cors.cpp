@@ -21,7 +21,7 @@ void CorsPolicy::decorate(const httplib::Request& req, httplib::Response& res) c
   if (!allows(origin)) return;
   res.set_header("Access-Control-Allow-Origin", origin);
   // Clients revalidate tiles with If-None-Match, so scripts need to read the ETag.
-  res.set_header("Access-Control-Expose-Headers", "ETag, X-Shadow-Outside-Map, X-Shadow-Receivers");
+  res.set_header("Access-Control-Expose-Headers", "ETag, X-Shadow-Outside-Map, X-Shadow-Receivers, X-Shadowtiles-Build");
 }
 
 void CorsPolicy::answer_options(const httplib::Request& req, httplib::Response& res) const {

@@ -29,6 +29,11 @@ void send_json(httplib::Response& res, int status, const nlohmann::json& body);
 void send_error(httplib::Response& res, const HttpError& error);
 void send_error(httplib::Response& res, int status, std::string_view code, std::string_view message);
 
+// Every answer computed from or read out of a build names it (the build id = meta config_hash), so
+// a client can tell which build answered across a swap (docs: config/README.md "Swapping builds").
+inline constexpr const char* kBuildHeader = "X-Shadowtiles-Build";
+inline void set_build_header(httplib::Response& res, const std::string& build_id) { res.set_header(kBuildHeader, build_id); }
+
 // The media type of a Content-Type header, lowercased, without parameters ("; charset=...").
 std::string media_type(std::string_view content_type);
 

@@ -40,6 +40,7 @@ template <class OnAbsent>
 void serve_blob(ServiceState& state, const ShadowMap& map, bool versioned, const httplib::Request& req,
                 httplib::Response& res, store::Database db, std::span<const uint8_t> key,
                 std::optional<store::Method> expected_method, const std::string& what, OnAbsent on_absent) {
+  set_build_header(res, map.meta().config_hash);
   const store::Store* store = map.local_store();
   if (!store) return send_error(res, 500, "internal", "the served build has no local store");
   auto snapshot = store->snapshot();
@@ -149,6 +150,7 @@ void get_build(ServiceState& state, const httplib::Request& req, httplib::Respon
     // The directory's record no longer matches the build being served (a reload is pending).
     return send_error(res, 503, "not_ready", "the store's build record changed; retry after the reload");
   }
+  set_build_header(res, held->meta().config_hash);
   const std::string etag = "\"" + held->meta().config_hash + "\"";
   res.set_header("ETag", etag);
   res.set_header("Cache-Control", cache_control(state, false));

@@ -10,13 +10,16 @@ void register_info_routes(httplib::Server& http, ServiceState& state) {
     auto map = state.map();
     if (!map) return send_error(res, 503, "not_ready", "the store is not open yet");
     send_json(res, 200, meta_document(*map));
+    set_build_header(res, map->meta().config_hash);
     // The document changes only with the store; a short max-age lets clients skip refetching it.
     res.set_header("Cache-Control", "public, max-age=60");
   });
   http.Get("/healthz", [&state](const httplib::Request&, httplib::Response& res) {
-    if (!state.map())
+    auto map = state.map();
+    if (!map)
       return send_json(res, 503, {{"status", "starting"}, {"error", "the store is not open yet"}, {"code", "not_ready"}});
-    send_json(res, 200, {{"status", "ok"}});
+    send_json(res, 200, {{"status", "ok"}, {"build_id", map->meta().config_hash}});
+    set_build_header(res, map->meta().config_hash);
     res.set_header("Cache-Control", "no-store");
   });
   http.Get("/metrics", [&state](const httplib::Request&, httplib::Response& res) {

@@ -64,6 +64,7 @@ void get_render(ServiceState& state, const httplib::Request& req, httplib::Respo
   auto held = state.map();
   if (!held) return send_error(res, 503, "not_ready", "the store is not open yet");
   const ShadowMap& map = *held;
+  set_build_header(res, map.meta().config_hash);
   const size_t first = versioned ? 2 : 1;
   if (versioned && req.matches[1].str() != map.meta().config_hash)
     return send_error(res, 404, "not_found", "build '" + req.matches[1].str().substr(0, 40) + "' is not served here");

@@ -32,6 +32,7 @@ void get_shadow(ServiceState& state, const httplib::Request& req, httplib::Respo
   if (!slot) return;
   auto held = state.map();  // this request's build, even if a reload publishes another
   const ShadowMap& map = *held;
+  set_build_header(res, map.meta().config_hash);
   static constexpr std::string_view kPointParams[] = {"x", "y", "z"};
   auto options = options_from_params(req.params, state.config.max_pcf, kPointParams);
   if (!options) return send_error(res, http_error_for(options.error()));
@@ -126,9 +127,13 @@ void post_shadow(ServiceState& state, const httplib::Request& req, httplib::Resp
   if (!require_map(state, res)) return;
   auto slot = take_query_slot(state, res);  // parsing a large body is query work too
   if (!slot) return;
+  // One build answers the whole batch, even if a reload publishes another meanwhile.
+  auto held = state.map();
+  if (!held) return send_error(res, 503, "not_ready", "the store is not open yet");
+  set_build_header(res, held->meta().config_hash);
   std::string type = media_type(req.get_header_value("Content-Type"));
-  if (type == "application/json") return post_json(state, *state.map(), req, res);
-  if (type == kBinaryType) return post_binary(state, *state.map(), req, res);
+  if (type == "application/json") return post_json(state, *held, req, res);
+  if (type == kBinaryType) return post_binary(state, *held, req, res);
   send_error(res, 415, "unsupported_media_type",
              "Content-Type must be application/json or application/octet-stream (float32 x, y, z triples)");
 }

@@ -8,7 +8,10 @@
 #include <signal.h>
 #include <sys/wait.h>
 
+#include <atomic>
 #include <bit>
+#include <map>
+#include <mutex>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -1079,6 +1082,91 @@ TEST(ServerReload, SwapsToTheBuildTheStorePathPointsAt) {
   repoint(empty);
   EXPECT_FALSE(running.server().reload().ok()) << "no build there";
   EXPECT_EQ(served_build(), id_b) << "the current build stays served";
+}
+
+
+// A swap under load (issue 18): clients keep sending binary batches while the store path is
+// repointed and the server reloads (what SIGHUP does). No request may fail, every answer names the
+// build it came from (X-Shadowtiles-Build), and every batch equals that one build's answers in
+// full: never a mix of the two builds within one batch.
+TEST(ServerReload, SwapUnderLoadLosesNoRequestAndNeverMixesBuilds) {
+  TempDir dir;
+  const auto a = dir.path() / "a.store", b = dir.path() / "b.store";
+  ASSERT_TRUE(run_build(bunny_config(a, {store::Method::raw})).ok());
+  BuildConfig config_b = bunny_config(b, {store::Method::raw});
+  config_b.light_direction = *light_direction_from_sun(200, 60, UpAxis::y);
+  ASSERT_TRUE(run_build(config_b).ok());
+  LoadOptions load;
+  load.up = UpAxis::y;
+  auto scene = load_scene(testing::shared_scene(kBunny), load);
+  ASSERT_TRUE(scene.ok());
+  std::vector<Vec3> points;
+  for (const Receiver& r : sample_receivers(*scene, 512, 11))
+    points.push_back({double(float(r.position[0])), double(float(r.position[1])), double(float(r.position[2]))});
+  std::map<std::string, std::string> expected;  // build id -> the binary answer of the whole batch
+  for (const auto& dir_of_build : {a, b}) {
+    auto map = ShadowMap::open(dir_of_build);
+    ASSERT_TRUE(map.ok());
+    std::string body;
+    for (const Vec3& p : points) {
+      auto answer = (*map)->query(p, store::Method::raw);
+      ASSERT_TRUE(answer.ok());
+      const float lit = answer->lit ? 1.0f : 0.0f;
+      body.append(reinterpret_cast<const char*>(&lit), 4);
+    }
+    expected[(*map)->meta().config_hash] = body;
+  }
+  ASSERT_EQ(expected.size(), 2u);
+  ASSERT_NE(expected.begin()->second, expected.rbegin()->second) << "the two builds must answer differently";
+
+  const auto current = dir.path() / "current";
+  std::filesystem::create_directory_symlink(a, current);
+  auto config = test_config();
+  config.reload_poll_s = 0;  // only the explicit reload below swaps
+  RunningServer running(config, &current);
+  const std::string body = encode_points(points);
+  std::atomic<bool> stop{false};
+  std::mutex mutex;
+  std::map<std::string, int> answers_by_build;
+  int failed = 0, mixed = 0;
+  std::vector<std::thread> clients;
+  for (int c = 0; c < 4; ++c)
+    clients.emplace_back([&] {
+      auto cli = running.client();
+      while (!stop.load()) {
+        auto res = cli.Post("/v1/shadow?method=raw", body, "application/octet-stream");
+        std::lock_guard lock(mutex);
+        if (!res || res->status != 200) {
+          ++failed;
+          continue;
+        }
+        const std::string build = res->get_header_value("X-Shadowtiles-Build");
+        auto it = expected.find(build);
+        if (it == expected.end() || it->second != res->body) ++mixed;
+        ++answers_by_build[build];
+      }
+    });
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  const auto next = dir.path() / "current.next";  // ln -sfn: rename a new link over the old
+  std::filesystem::create_directory_symlink(b, next);
+  std::filesystem::rename(next, current);
+  auto swapped = running.server().reload();
+  ASSERT_TRUE(swapped.ok()) << swapped.error().message;
+  EXPECT_TRUE(*swapped);
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  stop = true;
+  for (auto& t : clients) t.join();
+  EXPECT_EQ(failed, 0) << "requests lost during the swap";
+  EXPECT_EQ(mixed, 0) << "answers that are not exactly one build's";
+  ASSERT_EQ(answers_by_build.size(), 2u) << "both builds answered";
+  int total = 0;
+  for (const auto& [build, n] : answers_by_build) {
+    EXPECT_GT(n, 0) << build;
+    total += n;
+  }
+  std::printf("swap under load: %d batches of %zu points from 4 clients, %d from the old build, %d from the new, "
+              "%d failed, %d mixed\n", total, points.size(), answers_by_build.begin()->second,
+              answers_by_build.rbegin()->second, failed, mixed);
 }
 
 }  // namespace
