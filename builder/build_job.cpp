@@ -21,6 +21,7 @@
 #include "builder/light_space_scene.hpp"
 #include "builder/second_layer_rule.hpp"
 #include "builder/tile_encoder.hpp"
+#include "builder/tile_coverage_estimate.hpp"
 #include "builder/tile_preview_builder.hpp"
 #include "builder/top_levels.hpp"
 #include "codec/store_meta.hpp"
@@ -160,10 +161,18 @@ void log_open_mesh_hint(const Scene& scene) {
 std::vector<TileWork> candidate_work(const LightSpaceScene& light_scene, const TileLayout& layout) {
   std::vector<TileWork> work;
   for (uint64_t i = 0; i < layout.tile_count(); ++i) {
-    size_t refs = light_scene.triangles_of(TileLayout::from_morton_index(i)).size();
-    if (refs) work.push_back({i, uint64_t(layout.tile_size()) * layout.tile_size(), refs});
+    TileCoord tile = TileLayout::from_morton_index(i);
+    size_t refs = light_scene.triangles_of(tile).size();
+    if (refs)
+      work.push_back({i, uint64_t(layout.tile_size()) * layout.tile_size(), refs, estimate_covered_texels(light_scene, tile)});
   }
   return work;
+}
+
+uint64_t covered_texels_estimate(const std::vector<TileWork>& work) {
+  uint64_t sum = 0;
+  for (const TileWork& w : work) sum += w.covered_texels;
+  return sum;
 }
 
 nlohmann::json plan_json(const std::vector<ShardRange>& plan) {
@@ -225,6 +234,7 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
     summary.tiles_candidate = work.size();
     summary.stats = {{"config_hash", config_hash}, {"tiles", {{"total", summary.tiles_total}, {"with_triangles", work.size()}}},
                      {"triangle_references", light_scene.triangle_references()},
+                     {"covered_texels_estimate", covered_texels_estimate(work)},
                      {"shard_plan", plan_json(plan)}, {"imbalance", shard_imbalance(plan)}};
     return summary;
   }

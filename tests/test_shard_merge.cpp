@@ -130,6 +130,26 @@ TEST_F(ShardMerge, ShardsHoldDisjointSharesRecordingTheWholeBuild) {
   EXPECT_EQ(tiles, single.build_stats["tiles"]["with_triangles"].get<uint64_t>());
 }
 
+// The plan weighs each tile's estimated hit texels (builder/tile_coverage_estimate.hpp); the estimate
+// sampled on a 32² grid per tile must track what the build's rays then hit.
+TEST_F(ShardMerge, PlanCoverageEstimateTracksTheHitTexels) {
+  StoreMeta single = read_meta(dir_->path() / "single");
+  std::string plan_text;
+  // In a subshell, so the log on stderr stays out of the JSON (run() appends 2>&1). Appended piece
+  // by piece: GCC 12 warns falsely (-Wrestrict) on "(" + std::string.
+  std::string command = cli();
+  command.insert(0, 1, '(');
+  command += " build " + testing::shared_scene("fzk_haus/fzk_haus.obj").string();
+  command += " --up y --sun 135,45 --resolution 4096 --tile 512 --method raw,mh,mmh,dagmh --plan-shards 4 2>/dev/null)";
+  ASSERT_EQ(run(command, &plan_text), 0) << plan_text;
+  auto plan = nlohmann::json::parse(plan_text);
+  double estimate = plan["covered_texels_estimate"].get<double>();
+  double hits = single.build_stats["hit_texels"].get<double>();
+  ASSERT_GT(hits, 0);
+  EXPECT_NEAR(estimate / hits, 1.0, 0.1) << "estimate " << estimate << " hit texels " << hits;
+  EXPECT_LE(plan["imbalance"].get<double>(), 1.1);
+}
+
 TEST_F(ShardMerge, MergeEqualsTheOneMachineBuild) {
   auto out = dir_->path() / "merged";
   std::string log;
