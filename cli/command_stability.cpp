@@ -161,7 +161,7 @@ void add_stability_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--charts", flags->charts, "Chart folder (default: docs/stability next to the report)");
   cmd->add_option("--scenarios", flags->scenarios,
                   "Only these scenarios, comma-separated (open_geometry, thin_walls, grazing_sun, tile_seams, "
-                  "precision, resolution_sweep, degenerate_input, hash_collisions)");
+                  "precision, resolution_sweep, degenerate_input, hash_collisions, surfaces_contract)");
   cmd->add_option("--json", flags->json, "Also write every figure and check as JSON");
   cmd->add_option("--scene-root", flags->scene_root, "Folder of the shared scenes")->capture_default_str();
   cmd->add_option("--receivers", flags->receivers, "Receivers per scene (default 20000, quick 5000)");

@@ -102,14 +102,15 @@ TEST(StabilityDegenerate, LightParallelToALargePlaneBuildsAndAnswers) {
   EXPECT_NE(above.output.find("\"lit\": true"), std::string::npos) << "nothing lies between it and the sun";
 }
 
-// The command end to end on its quick scenarios that need no large scene: the report, the JSON and
-// every check.
+// The command end to end on quick scenarios that need no large scene (the surfaces contract's rows
+// use bunny, one small shared scene): the report, the JSON and every check (scenario 9: MH, MMH and
+// DAG-MH leak nothing beyond raw on each of its five subjects).
 TEST(StabilityCommand, WritesTheReportAndPassesItsChecks) {
   TempDir dir;
   std::string output;
   const auto report = dir.path() / "STABILITY.md", json = dir.path() / "stability.json";
   int code = testing::run_command(testing::cli_path().string() + " stability --quick --scenarios " +
-                                      "degenerate_input,hash_collisions --out " + report.string() + " --json " +
+                                      "degenerate_input,hash_collisions,surfaces_contract --out " + report.string() + " --json " +
                                       json.string() + " --scene-root " + testing::shared_scene("").string(),
                                   &output);
   EXPECT_EQ(code, 0) << output;
@@ -118,8 +119,9 @@ TEST(StabilityCommand, WritesTheReportAndPassesItsChecks) {
   js << std::ifstream(json).rdbuf();
   EXPECT_NE(md.str().find("## 7. Degenerate input"), std::string::npos);
   EXPECT_NE(md.str().find("## 8. Hash collisions"), std::string::npos);
+  EXPECT_NE(md.str().find("## 9. Surfaces receiver contract"), std::string::npos);
   auto doc = nlohmann::json::parse(js.str());
-  ASSERT_EQ(doc["scenarios"].size(), 2u);
+  ASSERT_EQ(doc["scenarios"].size(), 3u);
   for (const auto& scenario : doc["scenarios"]) {
     EXPECT_GT(scenario["checks"].size(), 3u);
     for (const auto& check : scenario["checks"]) EXPECT_TRUE(check["passed"].get<bool>()) << check.dump();

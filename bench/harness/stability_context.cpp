@@ -60,6 +60,7 @@ const std::vector<ScenarioEntry>& all_scenarios() {
       {"grazing_sun", run_grazing_sun},           {"tile_seams", run_tile_seams},
       {"precision", run_precision},               {"resolution_sweep", run_resolution_sweep},
       {"degenerate_input", run_degenerate_input}, {"hash_collisions", run_hash_collisions},
+      {"surfaces_contract", run_surfaces_contract},
   };
   return entries;
 }

@@ -45,6 +45,7 @@ Result<std::vector<StabilityRow>> measure_build(const MeasureSpec& spec, std::sp
   build.methods = spec.methods.empty() ? supported_methods() : spec.methods;
   build.load = spec.load;
   build.open_exit_at_far_plane = spec.open_exit_at_far_plane;
+  build.receivers = spec.receivers;
   build.cap_exits_at_receiver_surfaces = true;  // the suite measures `build --exit-caps` (STABILITY.md)
   build.overwrite = true;
   auto summary = run_build(build);

@@ -58,6 +58,7 @@ struct MeasureSpec {
   uint32_t tile_size = 1024;
   double elevation = std::numeric_limits<double>::quiet_NaN();
   bool open_exit_at_far_plane = false;  // comparison rule (rows get a suffix)
+  ReceiverContract receivers = ReceiverContract::anywhere;  // the build's contract (docs/receiver-contracts.md)
   std::vector<store::Method> methods;   // empty: supported_methods()
 };
 

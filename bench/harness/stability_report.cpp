@@ -46,9 +46,9 @@ void table(std::string& md, const std::vector<std::string>& header, const std::v
 // What the suite found and what was done about it (figures from the runs named in each item).
 const char* kFindings = R"(## Findings and fixes
 
-1. **Fixed behind `shadowtiles build --exit-caps`: lossless methods leaked light that raw does not, at
-   silhouettes and ridges** (`builder/receiver_surface_caps.cpp`; this suite builds with it; off by
-   default: ×1.45–2.2 bytes on compressible scenes (nefertiti, terragen 4096²: ×1.51, ×1.45; fzk_haus
+1. **Fixed by exit caps (on by default since issue #14; `--no-exit-caps` turns them off): lossless
+   methods leaked light that raw does not, at silhouettes and ridges** (`builder/receiver_surface_caps.cpp`;
+   this suite builds with it; cost where they were off by default: ×1.45–2.2 bytes on compressible scenes (nefertiti, terragen 4096²: ×1.51, ×1.45; fzk_haus
    8192²: ×1.0). The cap pass costs little since builder 0.3.0: rows of the triangle's span, closed form
    inside it, exact clipping only on edges, bit-identical to per-texel clipping (tests/
    test_receiver_surface_caps*); fzk_haus 8192² builds in 14–17 s with caps vs 13.5–14.7 s without,

@@ -10,6 +10,8 @@
 //   6 resolution sweep   lossless error vs resolution, power of two to power of two
 //   7 degenerate input   empty, one triangle, NaN/inf, zero area, edge-on light, zero light, R = 1
 //   8 hash collisions    MMH merging with the topology hash cut to a few bits
+//   9 surfaces contract  `--receivers surfaces`: open roof, leaf, stacked shells, a mesh with holes, a thin
+//                        open wall; nothing leaks beyond raw
 // Errors: a scenario returns an error only when it cannot run (missing scene, I/O); what it finds
 // goes into its checks. Thread safety: one scenario at a time (builds use their own threads).
 #pragma once
@@ -95,6 +97,7 @@ Result<ScenarioResult> run_precision(StabilityContext& context);
 Result<ScenarioResult> run_resolution_sweep(StabilityContext& context);
 Result<ScenarioResult> run_degenerate_input(StabilityContext& context);
 Result<ScenarioResult> run_hash_collisions(StabilityContext& context);
+Result<ScenarioResult> run_surfaces_contract(StabilityContext& context);
 
 struct ScenarioEntry {
   const char* id;

@@ -69,6 +69,33 @@ Status write_thin_wall(const std::filesystem::path& file, double thickness) {
   return obj.write(file);
 }
 
+Status write_surfaces_scene(const std::filesystem::path& file, const std::string& which) {
+  ObjWriter obj;
+  obj.quad("floor", {-10, -10, 0}, {10, -10, 0}, {10, 10, 0}, {-10, 10, 0});
+  // An open box: four walls and a top, facing out, no bottom.
+  auto shell = [&](const std::string& name, double h, double top) {
+    obj.quad(name + "_top", {-h, -h, top}, {h, -h, top}, {h, h, top}, {-h, h, top});
+    obj.quad(name + "_south", {-h, -h, 0}, {h, -h, 0}, {h, -h, top}, {-h, -h, top});
+    obj.quad(name + "_east", {h, -h, 0}, {h, h, 0}, {h, h, top}, {h, -h, top});
+    obj.quad(name + "_north", {h, h, 0}, {-h, h, 0}, {-h, h, top}, {h, h, top});
+    obj.quad(name + "_west", {-h, h, 0}, {-h, -h, 0}, {-h, -h, top}, {-h, h, top});
+  };
+  if (which == "roof_inner_wall") {
+    obj.quad("roof", {-5, -5, 3}, {5, -5, 3}, {5, 5, 3}, {-5, 5, 3});
+    obj.quad("inner_wall", {-4, 0.3, 0}, {4, 0.3, 0}, {4, 0.3, 2.9}, {-4, 0.3, 2.9});
+  } else if (which == "leaf") {
+    obj.quad("leaf", {-2, -1, 2}, {2, -1, 2.5}, {2, 1, 2.5}, {-2, 1, 2});
+  } else if (which == "stacked_shells") {
+    shell("outer", 4, 4);
+    shell("inner", 2, 2);
+  } else if (which == "open_wall") {
+    obj.quad("wall", {0, -5, 0}, {0, 5, 0}, {0, 5, 4}, {0, -5, 4});
+  } else {
+    return make_error(ErrorCode::invalid_input, "no surfaces scene named " + which);
+  }
+  return obj.write(file);
+}
+
 Status write_single_triangle(const std::filesystem::path& file, double size) {
   ObjWriter obj;
   int a = obj.vertex(0, 0, 0), b = obj.vertex(size, 0, 0), c = obj.vertex(0, size, 0);

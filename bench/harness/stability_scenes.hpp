@@ -26,6 +26,14 @@ struct SyntheticBounds {
 };
 SyntheticBounds thin_wall_bounds();
 
+// Scenes of the `surfaces` receiver contract's rows (scenario 9), each over a one-sided 20 x 20 floor:
+// - roof_inner_wall: a one-sided roof (10 x 10 at height 3) on no walls, and an inside wall quad whose
+//   top (2.9) lies just under the roof: the docs' counter-example to the centre-ray rule;
+// - leaf: one single-sided tilted quad (a leaf) at height 2 to 2.5;
+// - stacked_shells: two open boxes without bottoms (8 x 8 x 4 around 4 x 4 x 2);
+// - open_wall: one single-sided vertical quad (10 long, 4 high, no thickness) across the floor.
+Status write_surfaces_scene(const std::filesystem::path& file, const std::string& which);
+
 // One triangle of about `size` world units (a single-triangle scene).
 Status write_single_triangle(const std::filesystem::path& file, double size);
 
