@@ -416,6 +416,14 @@ TEST(SceneLoaderErrors, ControlCharacterInPlyHeaderIsRefused) {
     EXPECT_EQ(scene.error().code, ErrorCode::invalid_input);
     EXPECT_NE(scene.error().message.find("control character"), std::string::npos) << scene.error().message;
   }
+  // fuzz_scene_loader regression: an unknown header line made assimp seek for 32 s on 1.6 KB.
+  write_file(dir.path() / "unknown.ply",
+             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\npr$clr.specularoperty float z\n"
+             "element face 1\nproperty list uchar int vertex_indices\nend_header\n" + body);
+  auto unknown = load_scene(dir.path() / "unknown.ply", {});
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.error().message.find("unknown header keyword 'pr$clr.specularoperty'"), std::string::npos)
+      << unknown.error().message;
   // The same file with a plain newline still loads.
   write_file(dir.path() / "ok.ply",
              "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
