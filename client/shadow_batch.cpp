@@ -4,7 +4,8 @@
 //   B. per chunk: stable scatter into the buckets (one counting-sort pass over the whole batch);
 //   C. workers claim buckets: sort the bucket's low key bits in cache (LSD radix), then walk its runs
 //      of points per tile: the tile is looked up once per run, point queries go to the decoder's
-//      shared-path walk (lit_sorted), PCF kernels inside the tile to lit_count, kernels crossing a
+//      shared-path walk (lit_sorted), PCF kernels inside the tile to lit_count_sorted (descents to the
+//      kernels' common ancestors shared along the curve), kernels crossing a
 //      tile or the map's edge and coarse levels to the per-point path.
 // Every answer is computed by the same expressions as query() / query_pcf(), so they are equal.
 #include <algorithm>
@@ -173,6 +174,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
     TexelQuery queries[kQueryBlock];
     uint32_t query_index[kQueryBlock];
     uint8_t lit[kQueryBlock];
+    uint32_t counts[kQueryBlock];
     for (size_t b; !failed && (b = next_bucket.fetch_add(1, std::memory_order_relaxed)) < buckets;) {
       const uint32_t s = bucket_start[b], e = bucket_start[b + 1];
       if (s == e) continue;
@@ -212,13 +214,22 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
           }  // empty tile: lit (already 1)
         } else {
           const int64_t half = kernel / 2, size = layout_.tile_size();
+          size_t block = 0;  // kernels inside the tile, handed to the decoder together (shared descents)
+          auto flush = [&] {
+            tile->lit_count_sorted({queries, block}, kernel, counts);
+            for (size_t j = 0; j < block; ++j) out.lit[query_index[j]] = float(double(counts[j]) / k2);
+            block = 0;
+          };
           for (uint32_t i = run; i < run_end; ++i) {
             const BatchItem& item = sorted[i];
             const int64_t gu = morton_u(item.key), gv = morton_v(item.key);
             const int64_t lu = gu & tile_mask, lv = gv & tile_mask;
             uint64_t count;
             if (!level && tile && lu >= half && lv >= half && lu + half < size && lv + half < size) {
-              count = tile->lit_count(uint32_t(lu - half), uint32_t(lv - half), kernel, kernel, item.threshold);
+              queries[block] = {uint32_t(lu - half), uint32_t(lv - half), item.threshold};
+              query_index[block] = item.index;
+              if (++block == kQueryBlock) flush();
+              continue;
             } else if (!level && !tile && lu >= half && lv >= half && lu + half < size && lv + half < size) {
               count = uint64_t(kernel) * kernel;  // inside an empty tile: all lit
             } else {
@@ -228,6 +239,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
             }
             out.lit[item.index] = float(double(count) / k2);
           }
+          if (block > 0) flush();
         }
         run = run_end;
       }

@@ -44,6 +44,9 @@ class MhDecodedTile final : public DecodedTile {
   void lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const override {
     view_.lit_sorted(queries, max_level == 255 ? kMhAllLevels : max_level, lit);
   }
+  void lit_count_sorted(std::span<const TexelQuery> corners, uint32_t k, uint32_t* counts) const override {
+    view_.pcf_count_sorted(corners, k, counts);
+  }
   // SBE16a-style parts: header (root value included), embedded skip list, one record (mask +
   // block offset) per stored node with children, one float per stored valued node but the root.
   std::vector<SizePart> size_breakdown() const override {

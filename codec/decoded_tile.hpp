@@ -50,6 +50,13 @@ class DecodedTile {
   virtual void lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const {
     for (size_t i = 0; i < queries.size(); ++i) lit[i] = this->lit(queries[i].u, queries[i].v, queries[i].threshold, max_level);
   }
+  // Batch PCF: counts[i] = lit_count(c.u, c.v, k, k, c.threshold) for the k x k boxes inside the
+  // tile whose lower corners c = corners[i] are sorted along the Morton curve (any order is answered
+  // correctly). Hierarchical methods share the descents to the boxes' common ancestors.
+  virtual void lit_count_sorted(std::span<const TexelQuery> corners, uint32_t k, uint32_t* counts) const {
+    for (size_t i = 0; i < corners.size(); ++i)
+      counts[i] = lit_count(corners[i].u, corners[i].v, k, k, corners[i].threshold);
+  }
   // The payload's size split into named parts (e.g. DAG nodes, treelets, chunk headers), for
   // `inspect`; empty when the method has no breakdown.
   struct SizePart {

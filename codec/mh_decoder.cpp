@@ -294,17 +294,10 @@ float MhTileView::lookup(uint32_t u, uint32_t v, unsigned max_level) const {
 }
 
 template <unsigned W>
-uint32_t MhTileView::pcf_count_impl(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth,
-                                    float bias) const {
+uint32_t MhTileView::count_from_ancestor(WalkState s, unsigned lca, uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh,
+                                         float depth, float bias) const {
   const uint32_t u1 = u0 + kw - 1, v1 = v0 + kh - 1;
   const unsigned L = levels_;
-  const unsigned lca = L - unsigned(std::bit_width((u0 ^ u1) | (v0 ^ v1)));
-  unsigned level;
-  WalkState s = start_state(u0, v0, lca, &level);
-  level = walk<W>(stream_, s, level, lca, L, u0, v0);
-  // The walk ended above the kernel's common ancestor (or at a leaf there): one value decides all.
-  if (level < lca || s.mask == 0) return depth <= s.value + bias ? kw * kh : 0;
-
   WalkState path[F::kMaxLevels + 1];
   path[lca] = s;
   unsigned end = lca;
@@ -326,6 +319,75 @@ uint32_t MhTileView::pcf_count_impl(uint32_t u0, uint32_t v0, uint32_t kw, uint3
     }
   }
   return lit;
+}
+
+template <unsigned W>
+uint32_t MhTileView::pcf_count_impl(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth,
+                                    float bias) const {
+  const uint32_t u1 = u0 + kw - 1, v1 = v0 + kh - 1;
+  const unsigned L = levels_;
+  const unsigned lca = L - unsigned(std::bit_width((u0 ^ u1) | (v0 ^ v1)));
+  unsigned level;
+  WalkState s = start_state(u0, v0, lca, &level);
+  level = walk<W>(stream_, s, level, lca, L, u0, v0);
+  // The walk ended above the kernel's common ancestor (or at a leaf there): one value decides all.
+  if (level < lca || s.mask == 0) return depth <= s.value + bias ? kw * kh : 0;
+  return count_from_ancestor<W>(s, lca, u0, v0, kw, kh, depth, bias);
+}
+
+template <unsigned W>
+void MhTileView::pcf_count_sorted_impl(std::span<const TexelQuery> corners, uint32_t k, uint32_t* counts) const {
+  const unsigned L = levels_;
+  WalkState path[F::kMaxLevels + 1];  // path[base..end]: the previous box's walk toward its corner
+  unsigned base = 0, end = 0;
+  uint32_t pu = 0, pv = 0;
+  for (size_t i = 0; i < corners.size(); ++i) {
+    const uint32_t u0 = corners[i].u, v0 = corners[i].v, u1 = u0 + k - 1, v1 = v0 + k - 1;
+    const float depth = corners[i].threshold;
+    const unsigned lca = L - unsigned(std::bit_width((u0 ^ u1) | (v0 ^ v1)));
+    const unsigned shared = L - unsigned(std::bit_width((u0 ^ pu) | (v0 ^ pv)));
+    unsigned level;
+    WalkState s;
+    if (i > 0 && shared >= base && lca >= base) {
+      // Nodes down to `shared` lie on both corners' paths; the walk toward this corner goes on from there.
+      level = std::min({shared, end, lca});
+      s = path[level];
+    } else {
+      s = start_state(u0, v0, lca, &level);
+      base = level;
+      path[level] = s;
+    }
+    while (s.mask != 0 && level < lca) {
+      if (!step<W>(stream_, child_index(u0, v0, L - 1 - level), s)) break;
+      path[++level] = s;
+    }
+    end = level;
+    pu = u0;
+    pv = v0;
+    // As pcf_count_impl: a walk ending above the common ancestor (or at a leaf there) decides all.
+    counts[i] = level < lca || s.mask == 0 ? (depth <= s.value + 0.0f ? k * k : 0)
+                                           : count_from_ancestor<W>(s, lca, u0, v0, k, k, depth, 0.0f);
+  }
+}
+
+void MhTileView::pcf_count_sorted(std::span<const TexelQuery> corners, uint32_t k, uint32_t* counts) const {
+  for (const TexelQuery& c : corners) {
+    assert(k >= 1 && c.u < size_ && c.v < size_ && k <= size_ - c.u && k <= size_ - c.v);
+    if (k == 0 || c.u >= size_ || c.v >= size_ || k > size_ - c.u || k > size_ - c.v) {
+      // Release builds: out-of-contract boxes answer as pcf_lit_count does (clamped), one by one.
+      for (size_t i = 0; i < corners.size(); ++i)
+        counts[i] = pcf_lit_count(corners[i].u, corners[i].v, k, k, corners[i].threshold, 0.0f);
+      return;
+    }
+  }
+  switch (offset_width_) {
+    case 1: return pcf_count_sorted_impl<1>(corners, k, counts);
+    case 2: return pcf_count_sorted_impl<2>(corners, k, counts);
+    case 3: return pcf_count_sorted_impl<3>(corners, k, counts);
+    case 4: return pcf_count_sorted_impl<4>(corners, k, counts);
+    default:  // default-constructed view: nothing stored
+      for (size_t i = 0; i < corners.size(); ++i) counts[i] = 0;
+  }
 }
 
 uint32_t MhTileView::pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth,

@@ -84,12 +84,23 @@ class MhTileView {
   // Preconditions as lookup().
   void lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const;
 
+  // Batch PCF: counts[i] = pcf_lit_count(c.u, c.v, k, k, c.threshold, 0) for k x k boxes with lower
+  // corners c = corners[i]. Boxes sorted along the Morton curve share their descents to the boxes'
+  // common ancestors (each resumes from the deepest node shared with the previous corner); any order
+  // is answered correctly. Preconditions as pcf_lit_count().
+  void pcf_count_sorted(std::span<const TexelQuery> corners, uint32_t k, uint32_t* counts) const;
+
  private:
   struct WalkState {
     float value;
     uint32_t offset;  // child block of the node, valid when mask != 0
     uint8_t mask;     // codes of the node's children; 0 = walk ends here
   };
+  template <unsigned W>
+  uint32_t count_from_ancestor(WalkState s, unsigned lca, uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh,
+                               float depth, float bias) const;
+  template <unsigned W>
+  void pcf_count_sorted_impl(std::span<const TexelQuery> corners, uint32_t k, uint32_t* counts) const;
   template <unsigned W>
   uint32_t pcf_count_impl(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth, float bias) const;
   template <unsigned W>

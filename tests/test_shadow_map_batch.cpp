@@ -150,7 +150,8 @@ TEST_F(ShadowMapBatchTest, CoarseLevelsShuffledOrdersAndPoolsAgree) {
 
 // query_batch sorts a bucket along the curve only when its points are dense; the fixture's points are
 // sparse (about one per bucket), so here every texel of a region around a tile corner, on the surface
-// and just above or below it, makes dense buckets: the sorted shared-path walk must agree too.
+// and just above or below it, makes dense buckets: the sorted shared-path walks (points, and PCF
+// kernels sharing descents to their common ancestors) must agree too.
 TEST_F(ShadowMapBatchTest, DenseBatchesAgree) {
   auto map = ShadowMap::open(store());
   ASSERT_TRUE(map.ok());
@@ -167,7 +168,7 @@ TEST_F(ShadowMapBatchTest, DenseBatchesAgree) {
   std::shuffle(dense.begin(), dense.end(), std::mt19937(9));
   size_t shadowed = 0;
   for (store::Method method : m.meta().methods) {
-    for (unsigned kernel : {1u, 3u}) {
+    for (unsigned kernel : {1u, 3u, 7u}) {
       std::vector<uint32_t> outside;
       const std::vector<float> expected = single_answers(m, method, dense, kernel, {}, &outside);
       ShadowMap::BatchOptions options;
