@@ -131,7 +131,7 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
           error = tile.error();
           return;
         }
-        if (m == store::Method::cpvs)
+        if (store::method_properties(m).stores_visibility)  // answers, not values
           check_cpvs_tile(*intervals, tile->get(), tiles[i], cpvs_steps, local[m]);
         else
           check_tile(*intervals, tile->get(), tiles[i], cap_ulps, local[m]);

@@ -1,7 +1,7 @@
-// Tile encoders: one tile's dual-depth intervals -> the payload of every requested method (the blob
-// container, store/blob.hpp, compresses and checksums it). MH is built once and shared by the
-// methods derived from it (MMH merges it), and the tile's root interval is reported for the top
-// levels (docs/architecture.md §5 "tiled build").
+// Tile encoding: one tile's dual-depth intervals -> the payload of every requested method, through
+// the encoder table (builder/method_encoders.hpp); the blob container (store/blob.hpp) compresses and
+// checksums it. MH is built once and shared by the methods derived from it (MMH merges it), and the
+// tile's root interval is reported for the top levels (docs/architecture.md §5 "tiled build").
 // Thread safety: stateless; call concurrently.
 #pragma once
 
@@ -9,17 +9,11 @@
 #include <vector>
 
 #include "builder/depth_interval.hpp"
-#include "builder/mh_builder.hpp"
-#include "store/method.hpp"
+#include "builder/method_encoders.hpp"
 #include "common/result.hpp"
+#include "store/method.hpp"
 
 namespace shadowtiles {
-
-struct TileEncodeOptions {
-  MhConstruction construction = MhConstruction::bottom_up;
-  // Side of the whole map in texels: CPVS quantises depth to this many steps (docs/architecture.md §8).
-  uint32_t map_resolution = 0;
-};
 
 struct EncodedPayload {
   store::Method method;
@@ -37,7 +31,7 @@ struct TileEncoding {
 // Errors: unsupported for a method this builder cannot encode; invalid_input for bad intervals.
 Result<TileEncoding> encode_tile(const std::vector<store::Method>& methods, const TileIntervals& intervals,
                                  const TileEncodeOptions& options = {});
-// Methods encode_tile accepts.
+// Methods encode_tile accepts: those with an available encoder (builder/method_encoders.hpp).
 bool builder_supports(store::Method method);
 
 }  // namespace shadowtiles

@@ -2,17 +2,12 @@
 
 #include <algorithm>
 
-#include "builder/dagmh_encoder.hpp"
-#include "builder/mh_builder.hpp"
-#include "builder/mh_encoder.hpp"
-#include "builder/mmh_merger.hpp"
+#include "builder/method_encoders.hpp"
 #include "store/blob.hpp"
 
 namespace shadowtiles {
 
-bool is_hierarchical(store::Method method) {
-  return method == store::Method::mh || method == store::Method::mmh || method == store::Method::dagmh;
-}
+bool is_hierarchical(store::Method method) { return store::method_properties(method).has_top_tree; }
 
 Result<std::vector<TopLevelBlob>> encode_top_levels(const std::vector<store::Method>& methods, uint32_t tiles_per_side,
                                                     std::vector<DepthInterval> roots, unsigned tile_level,
@@ -22,23 +17,13 @@ Result<std::vector<TopLevelBlob>> encode_top_levels(const std::vector<store::Met
   grid.texels = std::move(roots);
   std::vector<TopLevelBlob> blobs;
   for (store::Method method : methods) {
-    if (!is_hierarchical(method)) continue;
-    auto top = build_mh(grid);
-    if (!top) return top.error();
-    if (method == store::Method::mmh) {
-      auto merged = merge_mmh(*top);
-      if (!merged) return merged.error();
-      top = std::move(merged);
-    }
-    Result<std::vector<uint8_t>> payload = std::vector<uint8_t>{};
-    if (method == store::Method::dagmh) {
-      payload = encode_dagmh(*top);  // its own skip list (DagMhOptions defaults, as the tiles)
-    } else {
-      MhEncodeOptions top_options;
-      top_options.embed_skip_list = true;
-      top_options.skip_level = std::min<unsigned>(6, tile_level);
-      payload = encode_mh(*top, top_options);
-    }
+    if (!store::method_properties(method).has_top_tree) continue;
+    const MethodEncoder* encoder = find_encoder(method);
+    if (!encoder || !encoder->encode_top_tree)
+      return make_error(ErrorCode::unsupported,
+                        std::string("no top-tree encoder for method '") + store::method_name(method) + "'");
+    // The skip list reaches at most 6 levels down (or the tile level, when the grid is shallower).
+    auto payload = encoder->encode_top_tree(grid, std::min<unsigned>(6, tile_level));
     if (!payload) return payload.error();
     blobs.push_back({method, store::encode_blob(method, *payload, 0, zstd_level)});
   }

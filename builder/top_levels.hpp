@@ -15,6 +15,7 @@
 
 namespace shadowtiles {
 
+// Methods with a top tree (store/method.hpp properties).
 bool is_hierarchical(store::Method method);
 
 struct TopLevelBlob {

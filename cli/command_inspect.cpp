@@ -13,9 +13,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/exit_codes.hpp"
-#include "codec/dagmh_decoder.hpp"
 #include "codec/decoded_tile.hpp"
-#include "codec/mh_decoder.hpp"
 #include "codec/store_meta.hpp"
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
@@ -31,18 +29,19 @@ struct InspectFlags {
 
 struct MethodTotals {
   uint64_t tiles = 0, blob_bytes = 0, payload_bytes = 0;
-  // MH family, from decoding every tile.
-  bool hierarchical = false;
-  uint64_t inner = 0, empty = 0, leaves = 0, blocks = 0, block_references = 0, skip_list_bytes = 0;
-  unsigned levels = 0;
-  // Payload parts summed over tiles, in the order the decoder names them.
+  // Payload parts and structure counts summed over tiles, in the order the decoder names them.
   std::vector<DecodedTile::SizePart> parts;
+  std::vector<DecodedTile::StructureCount> counts;
   bool undecodable = false;  // no decoder in this build: no breakdown
-  // DAG-MH counts.
-  bool dag = false;
-  uint64_t dag_nodes = 0, treelets = 0, values = 0, chunks = 0, representative_values = 0, quantized_values = 0,
-           raw_values = 0;
 };
+
+void add_counts(std::vector<DecodedTile::StructureCount>& sum, const std::vector<DecodedTile::StructureCount>& counts) {
+  for (const auto& c : counts) {
+    auto it = std::find_if(sum.begin(), sum.end(), [&](const auto& s) { return s.group == c.group && s.name == c.name; });
+    if (it == sum.end()) sum.push_back(c);
+    else it->value = c.is_max ? std::max(it->value, c.value) : it->value + c.value;
+  }
+}
 
 void add_parts(std::vector<DecodedTile::SizePart>& sum, const std::vector<DecodedTile::SizePart>& parts) {
   for (const auto& part : parts) {
@@ -84,43 +83,14 @@ int run(const InspectFlags& flags) {
       if (!decoded && decoded.error().code == ErrorCode::unsupported) {
         t.undecodable = true;
         t.parts.clear();
+        t.counts.clear();
       } else if (!decoded) {
         corrupt = decoded.error();
         return false;
       } else {
         add_parts(t.parts, (*decoded)->size_breakdown());
+        add_counts(t.counts, (*decoded)->structure_counts());
       }
-    }
-    if (tile_key->method == store::Method::dagmh) {
-      auto view = DagMhTileView::parse(*payload, DagMhParseOptions{0});
-      if (!view) {
-        corrupt = view.error();
-        return false;
-      }
-      const DagMhStats& stats = view->stats();
-      t.dag = true;
-      t.dag_nodes += stats.dag_nodes;
-      t.treelets += stats.treelets;
-      t.values += stats.values;
-      t.chunks += stats.chunks;
-      t.representative_values += stats.representative_values;
-      t.quantized_values += stats.quantized_values;
-      t.raw_values += stats.raw_values;
-    }
-    if (tile_key->method == store::Method::mh || tile_key->method == store::Method::mmh) {
-      auto view = MhTileView::parse(*payload);
-      if (!view) {
-        corrupt = view.error();
-        return false;
-      }
-      const MhStats& stats = view->stats();
-      t.hierarchical = true;
-      t.inner += stats.inner_nodes;
-      t.empty += stats.empty_nodes;
-      t.leaves += stats.leaf_nodes;
-      t.blocks += stats.blocks;
-      t.block_references += stats.block_references;
-      t.levels = std::max(t.levels, stats.levels);
     }
     return true;
   });
@@ -137,18 +107,7 @@ int run(const InspectFlags& flags) {
                      {"bits_per_texel", 8.0 * double(t.blob_bytes) / texels},
                      {"bytes_per_nonempty_texel", hit_texels > 0 ? double(t.blob_bytes) / hit_texels : 0.0},
                      {"ratio_vs_float32_map", double(t.blob_bytes) / (4.0 * texels)}};
-    if (t.hierarchical)
-      methods[name]["nodes"] = {{"inner", t.inner}, {"empty", t.empty}, {"leaf", t.leaves},
-                                {"blocks", t.blocks}, {"block_references", t.block_references},
-                                {"levels_in_tile", t.levels}};
-    if (t.dag)
-      methods[name]["dag"] = {{"dag_nodes", t.dag_nodes},
-                              {"treelets", t.treelets},
-                              {"values", t.values},
-                              {"chunks", t.chunks},
-                              {"representative_values", t.representative_values},
-                              {"quantized_values", t.quantized_values},
-                              {"raw_values", t.raw_values}};
+    for (const auto& c : t.counts) methods[name][c.group][c.name] = c.value;
     if (!t.parts.empty()) {
       nlohmann::json parts = nlohmann::json::array();
       for (const auto& part : t.parts)
@@ -173,19 +132,15 @@ int run(const InspectFlags& flags) {
     std::printf("%-8s %8llu %14llu %14llu %10.4f %10.4f\n", name.c_str(), (unsigned long long)t.tiles,
                 (unsigned long long)t.blob_bytes, (unsigned long long)t.payload_bytes,
                 8.0 * double(t.blob_bytes) / texels, double(t.blob_bytes) / (4.0 * texels));
-  for (auto& [name, t] : totals)
-    if (t.hierarchical)
-      std::printf("%-8s nodes: %llu inner, %llu empty, %llu leaf; %llu child blocks (%llu references); %u levels per tile\n",
-                  name.c_str(), (unsigned long long)t.inner, (unsigned long long)t.empty, (unsigned long long)t.leaves,
-                  (unsigned long long)t.blocks, (unsigned long long)t.block_references, t.levels);
-  for (auto& [name, t] : totals)
-    if (t.dag)
-      std::printf("%-8s %llu DAG nodes, %llu treelets; %llu values in %llu chunks: %llu representative, %llu "
-                  "quantised, %llu raw\n",
-                  name.c_str(), (unsigned long long)t.dag_nodes, (unsigned long long)t.treelets,
-                  (unsigned long long)t.values, (unsigned long long)t.chunks,
-                  (unsigned long long)t.representative_values, (unsigned long long)t.quantized_values,
-                  (unsigned long long)t.raw_values);
+  for (auto& [name, t] : totals) {
+    std::string group;
+    for (const auto& c : t.counts) {
+      if (c.group != group) std::printf("%s%-8s %s:", group.empty() ? "" : "\n", name.c_str(), c.group.c_str());
+      std::printf("%s %llu %s", c.group == group ? "," : "", (unsigned long long)c.value, c.name.c_str());
+      group = c.group;
+    }
+    if (!group.empty()) std::printf("\n");
+  }
   for (auto& [name, t] : totals) {
     if (t.parts.empty()) continue;
     std::printf("%s payload parts:\n", name.c_str());

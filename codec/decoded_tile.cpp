@@ -1,10 +1,11 @@
 #include "codec/decoded_tile.hpp"
 
-#include "codec/cpvs_decoder.hpp"
+#include <string>
+
 #include "codec/dagmh_decoder.hpp"
+#include "codec/method_decoders.hpp"
 #include "codec/mh_decoder.hpp"
 #include "codec/raw_tile.hpp"
-#include "codec/sst_decoder.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -68,6 +69,15 @@ class MhDecodedTile final : public DecodedTile {
     if (counted != st.payload_bytes) parts.push_back({"unaccounted", st.payload_bytes - counted});
     return parts;
   }
+  std::vector<StructureCount> structure_counts() const override {
+    const MhStats& st = view_.stats();
+    return {{"nodes", "inner", st.inner_nodes},
+            {"nodes", "empty", st.empty_nodes},
+            {"nodes", "leaf", st.leaf_nodes},
+            {"nodes", "blocks", st.blocks},
+            {"nodes", "block_references", st.block_references},
+            {"nodes", "levels_in_tile", st.levels, true}};
+  }
   const MhTileView& view() const { return view_; }
 
  private:
@@ -112,6 +122,16 @@ class DagMhDecodedTile final : public DecodedTile {
             {"multipliers", st.multiplier_bytes},
             {"raw float values", st.raw_value_bytes}};
   }
+  std::vector<StructureCount> structure_counts() const override {
+    const DagMhStats& st = view_.stats();
+    return {{"dag", "dag_nodes", st.dag_nodes},
+            {"dag", "treelets", st.treelets},
+            {"dag", "values", st.values},
+            {"dag", "chunks", st.chunks},
+            {"dag", "representative_values", st.representative_values},
+            {"dag", "quantized_values", st.quantized_values},
+            {"dag", "raw_values", st.raw_values}};
+  }
 
  private:
   explicit DagMhDecodedTile(std::span<const uint8_t> payload) : payload_(payload.begin(), payload.end()) {}
@@ -128,26 +148,25 @@ uint32_t DecodedTile::lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t 
   return lit;
 }
 
+Result<std::shared_ptr<const DecodedTile>> decode_raw_tile(std::span<const uint8_t> payload) {
+  auto view = RawTileView::parse(payload);
+  if (!view) return view.error();
+  return std::shared_ptr<const DecodedTile>(std::make_shared<RawDecodedTile>(std::move(*view)));
+}
+
+Result<std::shared_ptr<const DecodedTile>> decode_mh_tile(std::span<const uint8_t> payload) {
+  return MhDecodedTile::make(payload);
+}
+
+Result<std::shared_ptr<const DecodedTile>> decode_dagmh_tile(std::span<const uint8_t> payload) {
+  return DagMhDecodedTile::make(payload);
+}
+
 Result<std::shared_ptr<const DecodedTile>> decode_tile(store::Method method, std::span<const uint8_t> payload) {
-  switch (method) {
-    case store::Method::raw: {
-      auto view = RawTileView::parse(payload);
-      if (!view) return view.error();
-      return std::shared_ptr<const DecodedTile>(std::make_shared<RawDecodedTile>(std::move(*view)));
-    }
-    case store::Method::mh:
-    case store::Method::mmh:
-      return MhDecodedTile::make(payload);
-    case store::Method::dagmh:
-      return DagMhDecodedTile::make(payload);
-    case store::Method::cpvs:
-      return decode_cpvs_tile(payload);
-    case store::Method::sst:
-      return decode_sst_tile(payload);
-    default:
-      return make_error(ErrorCode::unsupported,
-                        std::string("no decoder for method '") + store::method_name(method) + "'");
-  }
+  if (TileDecoder decoder = find_decoder(method)) return decoder(payload);
+  std::string name = store::method_from_byte(uint8_t(method)) ? store::method_name(method)
+                                                              : "byte " + std::to_string(uint8_t(method));
+  return make_error(ErrorCode::unsupported, "no decoder for method '" + name + "'");
 }
 
 }  // namespace shadowtiles

@@ -64,10 +64,25 @@ class DecodedTile {
     uint64_t bytes = 0;
   };
   virtual std::vector<SizePart> size_breakdown() const { return {}; }
+  // Counts of the payload's structure for `inspect`, in named groups (e.g. "nodes", "dag"), summed
+  // over a store's tiles, or their maximum where `is_max`; empty when the method has none.
+  struct StructureCount {
+    std::string group;
+    std::string name;
+    uint64_t value = 0;
+    bool is_max = false;
+  };
+  virtual std::vector<StructureCount> structure_counts() const { return {}; }
 };
 
-// Decodes a blob's payload for `method`. Errors: corrupt_data (malformed payload), unsupported.
-// Safe on untrusted input.
+// Decodes a blob's payload for `method` through the decoder table (codec/method_decoders.hpp).
+// Errors: corrupt_data (malformed payload), unsupported (no decoder). Safe on untrusted input.
 Result<std::shared_ptr<const DecodedTile>> decode_tile(store::Method method, std::span<const uint8_t> payload);
+
+// The built-in decoders of raw, MH/MMH and DAG-MH (their adapters live in decoded_tile.cpp; CPVS's
+// and SST's in their own decoder files).
+Result<std::shared_ptr<const DecodedTile>> decode_raw_tile(std::span<const uint8_t> payload);
+Result<std::shared_ptr<const DecodedTile>> decode_mh_tile(std::span<const uint8_t> payload);
+Result<std::shared_ptr<const DecodedTile>> decode_dagmh_tile(std::span<const uint8_t> payload);
 
 }  // namespace shadowtiles

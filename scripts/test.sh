@@ -4,7 +4,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
-bash scripts/build.sh
+# -Werror on the project's own code (SHADOWTILES_WERROR): a new warning fails CI.
+bash scripts/build.sh -DSHADOWTILES_WERROR=ON
 # Long variants (label `long`: every scene at high resolution) run with `ctest --test-dir build -L long`.
 ctest --test-dir build --output-on-failure -j 2 --timeout 900 -LE long
 # Fuzzing, CI mode: every libFuzzer target (fuzz/) 100,000 executions under ASan + UBSan, after

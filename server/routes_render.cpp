@@ -205,7 +205,7 @@ void get_texel(ServiceState& state, const httplib::Request& req, httplib::Respon
       entry["tile_bytes"] = (*summary)->blob_bytes;
       entry["tile_bits_per_texel"] = double((*summary)->blob_bytes) * 8.0 / (double(T) * T);
     }
-    if (!surface && *value < 1.0f && method != store::Method::cpvs) surface = *value;
+    if (!surface && *value < 1.0f && !store::method_properties(method).stores_visibility) surface = *value;
     methods.push_back(std::move(entry));
   }
   nlohmann::json body = {{"u", *u}, {"v", *v},

@@ -36,7 +36,7 @@ BuildConfig config_for(const std::filesystem::path& scene, const std::filesystem
 }
 
 struct Agreement {
-  AccuracyCounts counts;
+  PointAccuracy counts;
   double trivial_best = 0;  // the better of "all lit" and "all shadowed"
 };
 
@@ -50,7 +50,7 @@ Agreement measure(const std::filesystem::path& scene_file, const std::filesystem
   auto device = EmbreeDevice::create();
   GroundTruth truth(*device, *scene, (*map)->frame().direction());
   auto receivers = sample_receivers(*scene, 10000, 42);
-  auto counts = evaluate_accuracy(**map, store::Method::raw, truth, receivers);
+  auto counts = point_accuracy(**map, store::Method::raw, receivers, point_truth(truth, receivers));
   EXPECT_TRUE(counts.ok());
   Agreement a{*counts, 0};
   double lit = double(counts->truth_lit) / double(counts->receivers);

@@ -1,7 +1,10 @@
-// The DAG-MH decoder against hostile payloads: every truncation, every single bit flip, random
-// multi-byte corruption, hostile header fields, wrong magic and version, garbage. Each must give an
+// The DAG-MH decoder against hostile payloads at several treelet heights, chunk sizes and skip
+// levels: every truncation, every single bit flip, random multi-byte corruption, hostile header
+// fields, wrong magic and version. Each must give an
 // error or a view whose lookups stay in bounds and finite (run under ASan: -DSHADOWTILES_SANITIZE=ON).
 // Every trial copies the bytes into an exact-size buffer so a read past the end is caught.
+// Generic attacks on the decode path (truncations, a trailing byte, bit flips, garbage) for every
+// method are in tests/test_codec_torture.cpp; this file keeps what is specific to the format.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -65,9 +68,6 @@ bool try_parse(const std::vector<uint8_t>& bytes) {
   return accepted;
 }
 
-TEST(DagMhRobustness, OriginalsParse) {
-  for (const auto& p : sample_payloads()) EXPECT_TRUE(try_parse(p));
-}
 
 TEST(DagMhRobustness, EveryTruncationIsAnError) {
   for (const auto& p : sample_payloads())
@@ -75,12 +75,6 @@ TEST(DagMhRobustness, EveryTruncationIsAnError) {
       EXPECT_FALSE(try_parse(std::vector<uint8_t>(p.begin(), p.begin() + len))) << "length " << len;
 }
 
-TEST(DagMhRobustness, ExtraBytesAreAnError) {
-  for (auto p : sample_payloads()) {
-    p.push_back(0);
-    EXPECT_FALSE(try_parse(p));
-  }
-}
 
 TEST(DagMhRobustness, EverySingleBitFlipIsSafe) {
   uint64_t accepted = 0, trials = 0;
@@ -145,16 +139,6 @@ TEST(DagMhRobustness, MagicAndVersion) {
   EXPECT_FALSE(DagMhTileView::parse(q).ok());
 }
 
-TEST(DagMhRobustness, RandomGarbage) {
-  std::mt19937 rng(9);
-  for (int trial = 0; trial < 5000; ++trial) {
-    std::vector<uint8_t> q(rng() % 200);
-    for (auto& b : q) b = uint8_t(rng());
-    if (q.size() >= 4) std::memcpy(q.data(), F::kMagic, 4);
-    if (q.size() >= 6) q[4] = 1, q[5] = 0;
-    try_parse(q);
-  }
-}
 
 }  // namespace
 }  // namespace shadowtiles

@@ -75,7 +75,7 @@ std::string thin_wall_obj(double thickness) {
 }
 
 struct Measured {
-  std::vector<AccuracyCounts> counts;       // per method of `methods`
+  std::vector<PointAccuracy> counts;       // per method of `methods`
   std::vector<std::vector<uint8_t>> lit;    // answers per method
   std::vector<Receiver> receivers;
 };
@@ -106,12 +106,12 @@ Measured build_and_measure(const BuildConfig& config, size_t receiver_count) {
   out.receivers = sample_receivers(*scene, receiver_count, 7);
   auto map = ShadowMap::open(config.store_path);
   EXPECT_TRUE(map.ok());
+  const std::vector<uint8_t> truth_lit = point_truth(truth, out.receivers);
   for (store::Method m : config.methods) {
-    auto counts = evaluate_accuracy(**map, m, truth, out.receivers);
+    std::vector<uint8_t> lit;
+    auto counts = point_accuracy(**map, m, out.receivers, truth_lit, {}, &lit);
     EXPECT_TRUE(counts.ok());
     out.counts.push_back(*counts);
-    std::vector<uint8_t> lit;
-    for (const Receiver& r : out.receivers) lit.push_back((*map)->query(r.position, m)->lit);
     out.lit.push_back(std::move(lit));
   }
   return out;
@@ -438,7 +438,7 @@ TEST(StabilityResolutionSweep, LosslessErrorNeverGrowsWithResolution) {
     Measured m = build_and_measure(config, 4000);
     ASSERT_EQ(m.counts.size(), methods.size());
     errors.emplace_back();
-    for (const AccuracyCounts& c : m.counts) errors.back().push_back(c.false_lit + c.false_shadowed);
+    for (const PointAccuracy& c : m.counts) errors.back().push_back(c.false_lit + c.false_shadowed);
   }
   for (size_t r = 1; r < errors.size(); ++r)
     for (size_t k = 0; k < methods.size(); ++k) {

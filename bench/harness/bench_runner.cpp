@@ -7,7 +7,7 @@
 
 #include <spdlog/spdlog.h>
 
-#include "bench/harness/accuracy_eval.hpp"
+#include "builder/accuracy.hpp"
 #include "bench/harness/camera_receivers.hpp"
 #include "bench/harness/lookup_rate.hpp"
 #include "bench/harness/machine_info.hpp"
@@ -140,7 +140,7 @@ Status measure_store(const BenchConfig& config, const SceneSpec& spec, uint32_t 
     row["build_peak_rss_mib"] = build_peak_rss;
 
     // Accuracy: raw first (methods are ordered so), the others compared with its answers.
-    const bool is_raw = method == store::Method::raw;
+    const bool is_raw = store::method_properties(method).reference;
     auto acc = point_accuracy(**map, method, data.uniform, data.uniform_truth, is_raw ? std::span<const uint8_t>{} : raw_uniform,
                               is_raw ? &raw_uniform : nullptr);
     if (!acc) return acc.error();
@@ -266,7 +266,7 @@ Status run_bench(const BenchConfig& config, const std::filesystem::path& out_dir
     }
     methods.push_back(m);
   }
-  std::stable_partition(methods.begin(), methods.end(), [](store::Method m) { return m == store::Method::raw; });
+  std::stable_partition(methods.begin(), methods.end(), [](store::Method m) { return store::method_properties(m).reference; });
 
   std::error_code ec;
   std::filesystem::create_directories(out_dir / "stores", ec);

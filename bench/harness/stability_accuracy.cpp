@@ -22,7 +22,9 @@ const StabilityRow* raw_row(const std::vector<StabilityRow>& rows, const std::st
 
 bool is_exact_name(const std::string& method) {
   auto parsed = store::parse_method(method);
-  return parsed && is_interval_exact(*parsed);
+  // Interval-exact methods store a value inside each texel's interval (store/method.hpp), so they
+  // must never leak where raw (the interval's lower bound) does not.
+  return parsed && store::method_properties(*parsed).interval_exact && !store::method_properties(*parsed).reference;
 }
 
 // Light a lossless method lets through where raw does not: its false-lit receivers beyond raw's
@@ -86,7 +88,7 @@ Result<ScenarioResult> run_open_geometry(StabilityContext& context) {
     spec.open_exit_at_far_plane = true;
     std::vector<store::Method> compared;
     for (store::Method m : supported_methods())
-      if (m == store::Method::raw || is_interval_exact(m)) compared.push_back(m);
+      if (store::method_properties(m).interval_exact) compared.push_back(m);
     spec.methods = compared;
     auto far = context.measure(**scene, spec);
     if (!far) return far.error();
@@ -231,7 +233,7 @@ Result<ScenarioResult> run_resolution_sweep(StabilityContext& context) {
   // 2 sqrt(e) + 3 above the coarser resolution's count e.
   for (const StabilityRow& fine : result.rows) {
     auto method = store::parse_method(fine.method);
-    if (!method || !(is_interval_exact(*method) || *method == store::Method::raw)) continue;
+    if (!method || !store::method_properties(*method).interval_exact) continue;
     for (const StabilityRow& coarse : result.rows)
       if (coarse.subject == fine.subject && coarse.method == fine.method && coarse.resolution * 2 == fine.resolution) {
         const uint64_t e0 = coarse.false_lit + coarse.false_shadowed, e1 = fine.false_lit + fine.false_shadowed;

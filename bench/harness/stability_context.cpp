@@ -1,6 +1,6 @@
 #include <spdlog/spdlog.h>
 
-#include "bench/harness/accuracy_eval.hpp"
+#include "builder/accuracy.hpp"
 #include "bench/harness/stability_scenarios.hpp"
 
 namespace shadowtiles::bench {

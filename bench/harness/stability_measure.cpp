@@ -4,7 +4,7 @@
 
 #include <spdlog/spdlog.h>
 
-#include "bench/harness/accuracy_eval.hpp"
+#include "builder/accuracy.hpp"
 #include "builder/tile_encoder.hpp"
 
 namespace shadowtiles::bench {
@@ -17,15 +17,12 @@ double number_at(const nlohmann::json& stats, const char* group, const std::stri
 
 }  // namespace
 
-bool is_interval_exact(store::Method method) {
-  return method == store::Method::mh || method == store::Method::mmh || method == store::Method::dagmh;
-}
 
 std::vector<store::Method> supported_methods() {
   std::vector<store::Method> methods;
   for (store::Method m : store::all_methods())
     if (builder_supports(m)) methods.push_back(m);
-  std::stable_partition(methods.begin(), methods.end(), [](store::Method m) { return m == store::Method::raw; });
+  std::stable_partition(methods.begin(), methods.end(), [](store::Method m) { return store::method_properties(m).reference; });
   return methods;
 }
 
@@ -61,7 +58,7 @@ Result<std::vector<StabilityRow>> measure_build(const MeasureSpec& spec, std::sp
     std::vector<uint8_t> raw_answers;  // raw is first when present
     for (store::Method method : build.methods) {
       const std::string name = store::method_name(method);
-      const bool is_raw = method == store::Method::raw;
+      const bool is_raw = store::method_properties(method).reference;
       auto accuracy = point_accuracy(**map, method, receivers, truth, is_raw ? std::span<const uint8_t>{} : raw_answers,
                                      is_raw ? &raw_answers : nullptr);
       if (!accuracy) return accuracy.error();

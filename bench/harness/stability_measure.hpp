@@ -43,9 +43,6 @@ struct StabilityRow {
   double false_shadowed_rate() const { return receivers ? double(false_shadowed) / double(receivers) : 0.0; }
 };
 
-// Methods whose stored value is any value inside the texel's dual-depth interval (lossless):
-// they must never leak where raw (the interval's lower bound) does not.
-bool is_interval_exact(store::Method method);
 // Every method the builder supports, raw first.
 std::vector<store::Method> supported_methods();
 

@@ -13,7 +13,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "bench/harness/accuracy_eval.hpp"
+#include "builder/accuracy.hpp"
 #include "bench/harness/stability_scenarios.hpp"
 #include "builder/dual_depth_renderer.hpp"
 #include "builder/light_space_scene.hpp"
