@@ -28,6 +28,7 @@
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
 #include "store/serving_lock.hpp"
+#include "store/store_layout.hpp"
 #include "store/tile_info.hpp"
 #include "store/tile_key.hpp"
 #include "store/tile_preview.hpp"
@@ -42,24 +43,6 @@ std::string hex64(uint64_t value) {
   char text[17];
   std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(value));
   return text;
-}
-
-std::vector<uint8_t> progress_key(TileCoord tile) {
-  std::vector<uint8_t> key(8);
-  for (int i = 0; i < 4; ++i) {
-    key[i] = uint8_t(tile.x >> (24 - 8 * i));
-    key[4 + i] = uint8_t(tile.y >> (24 - 8 * i));
-  }
-  return key;
-}
-
-TileCoord progress_tile(std::span<const uint8_t> key) {
-  TileCoord tile;
-  for (int i = 0; i < 4; ++i) {
-    tile.x = (tile.x << 8) | key[i];
-    tile.y = (tile.y << 8) | key[4 + i];
-  }
-  return tile;
 }
 
 std::vector<uint8_t> bytes_of(std::string_view text) { return {text.begin(), text.end()}; }
@@ -124,25 +107,6 @@ struct WorkerTotals {
   std::map<std::string, uint64_t> reference_bytes_by_method;
   std::map<std::string, double> encode_seconds_by_method;
 };
-
-// Progress record of a committed tile: whether it stored blobs, and its root interval (the top
-// levels are built from all tiles' roots, including tiles committed by an earlier run).
-std::vector<uint8_t> progress_value(bool stored, DepthInterval root) {
-  std::vector<uint8_t> value(9);
-  value[0] = stored ? 1 : 0;
-  std::memcpy(value.data() + 1, &root.lower, 4);
-  std::memcpy(value.data() + 5, &root.upper, 4);
-  return value;
-}
-
-DepthInterval progress_root(std::span<const uint8_t> value) {
-  DepthInterval root;  // miss
-  if (value.size() == 9) {
-    std::memcpy(&root.lower, value.data() + 1, 4);
-    std::memcpy(&root.upper, value.data() + 5, 4);
-  }
-  return root;
-}
 
 // One line when most triangles are one-sided under the `anywhere` contract: their texels get
 // zero-width intervals, which the MH family cannot compress.
@@ -306,13 +270,21 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   auto index_start = Clock::now();
   LightSpaceScene light_scene(*scene, *frame, *layout);
   std::map<TileCoord, DepthInterval> done;  // committed tiles and their root intervals
+  Status bad_progress;  // a corrupt record is an error, never a guess at what was done
   if (Status s = db.for_each(store::Database::progress, {},
                              [&](std::span<const uint8_t> key, std::span<const uint8_t> value) {
-                               if (key.size() == 8) done[progress_tile(key)] = progress_root(value);
+                               auto tile = store::decode_progress_key(key);
+                               auto record = store::decode_progress(value);
+                               if (!tile || !record) {
+                                 bad_progress = tile ? record.error() : tile.error();
+                                 return false;
+                               }
+                               done[TileCoord{tile->x, tile->y}] = {record->root_lower, record->root_upper};
                                return true;
                              });
       !s)
     return s.error();
+  if (!bad_progress) return bad_progress.error();
   std::vector<TileCoord> todo;
   uint64_t candidates = 0;
   std::vector<TileWork> work = candidate_work(light_scene, *layout);
@@ -421,7 +393,11 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
         if (failed) break;
         ++mine.stored_tiles;
       }
-      puts.push_back({store::Database::progress, progress_key(tile), progress_value(!empty, root)});
+      {
+        const auto key = store::progress_key(tile.x, tile.y);
+        const auto record = store::encode_progress({!empty, root.lower, root.upper});
+        puts.push_back({store::Database::progress, {key.begin(), key.end()}, {record.begin(), record.end()}});
+      }
       mine.encode_seconds += seconds_since(encode_start);
 
       auto store_start = Clock::now();

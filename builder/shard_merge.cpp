@@ -20,6 +20,7 @@
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
 #include "store/serving_lock.hpp"
+#include "store/store_layout.hpp"
 #include "store/tile_info.hpp"
 #include "store/tile_key.hpp"
 
@@ -30,7 +31,7 @@ using Clock = std::chrono::steady_clock;
 using Bytes = std::vector<uint8_t>;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 Bytes bytes_of(std::string_view text) { return {text.begin(), text.end()}; }
-constexpr const char* kMergeMarkerKey = "merge";  // meta key of a merge in progress (removed when done)
+constexpr const char* kMergeMarkerKey = store::kMetaMergeKey;  // a merge in progress (removed when done)
 
 Error invalid(const std::string& message) { return make_error(ErrorCode::invalid_input, message); }
 
@@ -62,11 +63,9 @@ std::optional<uint64_t> morton_of_key(store::Database db, std::span<const uint8_
                                       unsigned tile_level) {
   TileCoord tile;
   if (db == store::Database::progress) {
-    if (key.size() != 8) return std::nullopt;
-    for (int i = 0; i < 4; ++i) {
-      tile.x = (tile.x << 8) | key[i];
-      tile.y = (tile.y << 8) | key[4 + i];
-    }
+    auto decoded = store::decode_progress_key(key);
+    if (!decoded) return std::nullopt;
+    tile = {decoded->x, decoded->y};
   } else {
     auto decoded = store::decode_tile_key(key);
     if (!decoded || decoded->level != tile_level || !meta.has_method(decoded->method)) return std::nullopt;

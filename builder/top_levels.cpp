@@ -7,8 +7,6 @@
 
 namespace shadowtiles {
 
-bool is_hierarchical(store::Method method) { return store::method_properties(method).has_top_tree; }
-
 Result<std::vector<TopLevelBlob>> encode_top_levels(const std::vector<store::Method>& methods, uint32_t tiles_per_side,
                                                     std::vector<DepthInterval> roots, unsigned tile_level,
                                                     int zstd_level) {

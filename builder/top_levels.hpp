@@ -1,6 +1,7 @@
 // Top levels (docs/architecture.md, store layout): every tile's root interval forms a coarse map of
-// tiles_per_side² texels, itself compressed per hierarchical method (an MH with the skip list
-// embedded for mh/mmh, a DAG-MH for dagmh) and stored in `top` under top_tree_key(method).
+// tiles_per_side² texels, itself compressed for every method with a top tree by the method's own
+// top-tree encoder (builder/method_encoders.hpp: an MH with the skip list embedded for mh/mmh, a
+// DAG-MH for dagmh) and stored in `top` under top_tree_key(method).
 // One function for the one-machine build and for `shadowtiles merge`, so both write the same bytes.
 // Errors: from the MH/MMH/DAG-MH encoders. Thread safety: stateless.
 #pragma once
@@ -14,9 +15,6 @@
 #include "store/method.hpp"
 
 namespace shadowtiles {
-
-// Methods with a top tree (store/method.hpp properties).
-bool is_hierarchical(store::Method method);
 
 struct TopLevelBlob {
   store::Method method;

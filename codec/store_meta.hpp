@@ -16,15 +16,16 @@
 #include "codec/receiver_contract.hpp"
 #include "codec/tile_layout.hpp"
 #include "store/method.hpp"
+#include "store/store_layout.hpp"
 #include "common/result.hpp"
 
 namespace shadowtiles {
 
 // FORMAT: bump when the meta record or any tile payload changes incompatibly.
 constexpr int kStoreFormatVersion = 1;
-constexpr const char* kMetaBuildKey = "build";
-// Key of a hierarchical method's top-level tree (with embedded skip list) in the `top` database.
-inline std::string top_tree_key(store::Method method) { return std::string("top/") + store::method_name(method); }
+// Keys of the store's layout (store/store_layout.hpp), named here too for the readers of meta.
+using store::kMetaBuildKey;
+using store::top_tree_key;
 
 // A shard store (`build --shard I/N`) holds one share of a build; `shadowtiles merge` joins them.
 struct ShardInfo {

@@ -194,7 +194,9 @@ TEST(MethodRegistry, ToyMethodBuildsStoresDecodesAndVerifiesOnARealScene) {
     ++toy_tiles;
     auto payload = store::decode_blob(v);
     EXPECT_TRUE(payload.ok());
-    if (payload.ok()) EXPECT_TRUE(decode_tile(kToy, *payload).ok());
+    if (payload.ok()) {
+      EXPECT_TRUE(decode_tile(kToy, *payload).ok());
+    }
     std::vector<uint8_t> bad(v.begin(), v.end());
     bad[bad.size() / 2] ^= 0x10;
     EXPECT_FALSE(store::decode_blob(bad).ok());
