@@ -384,7 +384,7 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
     // `anywhere`, second_layer_caps under `surfaces`).
     const std::vector<float> caps =
         options_.receivers == ReceiverContract::surfaces
-            ? second_layer_caps(device_.get(), scene_, tile, options_.coplanar_epsilon, nullptr, &*intervals, options_.exit_margin)
+            ? second_layer_caps(device_.get(), scene_, tile, options_.coplanar_epsilon, *intervals, options_.exit_margin)
             : receiver_surface_caps(scene_, tile);
     apply_exit_caps(*intervals, caps, options_.exit_margin);
   }

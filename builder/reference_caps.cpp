@@ -146,6 +146,8 @@ void apply_reference_caps(const LightSpaceScene& scene, TileCoord tile, Receiver
         clipped.push_back({members[k], shallowest(poly), zmax, std::move(poly)});
       }
       double cap = std::numeric_limits<double>::infinity();
+      // Near cover counts below this depth only (second_layer::near_cover_offset).
+      const double floor_depth = double(interval.lower) + second_layer::near_cover_offset(coplanar_epsilon);
       if (receivers == ReceiverContract::anywhere) {
         for (const Clipped& c : clipped) cap = std::min(cap, c.zmin);
       } else {
@@ -161,13 +163,19 @@ void apply_reference_caps(const LightSpaceScene& scene, TileCoord tile, Receiver
             if (cap <= back.zmin) break;
             const Triangle& tf = triangles[front.triangle];
             if (front.triangle == back.triangle || tf.edge_on) continue;
-            if (!(front.zmin + coplanar_epsilon < back.zmax)) continue;
-            Poly region = back.poly;
-            for (int k = 0; k < 3 && !region.empty(); ++k) cut(region, scratch, tf.A[k], tf.B[k], 0, tf.C[k]);
-            // Behind by epsilon: depth - (e u + f v + g) - epsilon >= 0.
-            if (!region.empty()) cut(region, scratch, -tf.e, -tf.f, 1, -tf.g - coplanar_epsilon);
+            if (!(front.zmin + second_layer::kSameSurface < back.zmax)) continue;
+            Poly covered = back.poly;
+            for (int k = 0; k < 3 && !covered.empty(); ++k) cut(covered, scratch, tf.A[k], tf.B[k], 0, tf.C[k]);
             ++local.pair_clips;
+            if (covered.empty()) continue;
+            // Behind by epsilon: depth - (e u + f v + g) - epsilon >= 0, at any depth.
+            Poly region = covered;
+            cut(region, scratch, -tf.e, -tf.f, 1, -tf.g - coplanar_epsilon);
             if (!region.empty()) cap = std::min(cap, shallowest(region));
+            // Behind by more than the same-surface gap, and deeper than the floor (near cover).
+            cut(covered, scratch, -tf.e, -tf.f, 1, -tf.g - second_layer::kSameSurface);
+            if (!covered.empty()) cut(covered, scratch, 0, 0, 1, -floor_depth);
+            if (!covered.empty()) cap = std::min(cap, shallowest(covered));
           }
         }
       }

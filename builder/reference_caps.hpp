@@ -5,8 +5,9 @@
 // - anywhere: the cap is the shallowest clipped point of every surface a shadowed receiver can lie
 //   on (open triangles; closed and heightfield triangles not facing the light);
 // - surfaces: the cap is the shallowest point of the second layer inside the square: for every
-//   ordered pair (T, T'), T's clipped polygon cut by T''s edges and by z_T - z_T' >= epsilon; edge-on
-//   triangles cap by their own shallowest point (second_layer_rule.hpp).
+//   ordered pair (T, T'), T's clipped polygon cut by T''s edges and by z_T - z_T' >= epsilon, and
+//   (near cover) by z_T - z_T' >= kSameSurface and z_T >= the texel's lower + near_cover_offset;
+//   edge-on triangles cap by their own shallowest point (second_layer_rule.hpp).
 // Only texels with an exit are computed, and per texel the triangles are taken shallowest first
 // until none can lower the interval, so the result is the exact capped interval.
 // Thread safety: pure function.

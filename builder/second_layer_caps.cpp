@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <span>
 #include <utility>
 
 #include "builder/embree_device.hpp"
@@ -16,6 +17,7 @@ namespace {
 constexpr double kWiden = 1.0 / (1 << 20);  // texels the occluder's edges are widened by
 constexpr double kEpsilonShrink = 1.0 - 1.0 / (1 << 20);
 constexpr uint32_t kCell = 8;               // texels per grid cell side
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 struct Prepared {
   std::array<LightSpacePoint, 3> p;
@@ -77,9 +79,9 @@ void clip(const Polygon& in, Polygon& out, F value) {
   }
 }
 
-// The region of `back` lying behind `front` by at least `epsilon` (widened as the header says), into
-// `region`; false when empty.
-bool region_behind(const Prepared& back, const Prepared& front, double epsilon, Polygon& region) {
+// The region of `back` lying behind `front` by at least `gap` and, when `most` is finite, by at most
+// `most` (widened as the header says), into `region`; false when empty.
+bool region_behind(const Prepared& back, const Prepared& front, double gap, double most, Polygon& region) {
   Polygon scratch;
   Polygon* current = &region;
   Polygon* next = &scratch;
@@ -93,10 +95,52 @@ bool region_behind(const Prepared& back, const Prepared& front, double epsilon, 
     std::swap(current, next);
     if (current->count < 3) return false;
   }
-  clip(*current, *next, [&](const LightSpacePoint& x) { return x.depth - front.depth_at(x.u, x.v) - epsilon; });
+  clip(*current, *next, [&](const LightSpacePoint& x) { return x.depth - front.depth_at(x.u, x.v) - gap; });
   std::swap(current, next);
+  if (current->count >= 3 && std::isfinite(most)) {
+    clip(*current, *next, [&](const LightSpacePoint& x) { return most - (x.depth - front.depth_at(x.u, x.v)); });
+    std::swap(current, next);
+  }
   if (current != &region) region = *current;
   return region.count >= 3;
+}
+
+// Near cover (second_layer::near_cover_offset): lowers each texel's cap to the shallowest point of
+// the convex `region` inside its closed square at or below the texel's floor, lower + `offset`.
+// Per texel, exact clipping in double: the square's four sides, then depth >= floor. Texels without
+// an exit have nothing to cap.
+void lower_caps_above_floor(const Polygon& region, const TexelWindow& window, const TileIntervals& intervals,
+                            double offset, std::span<float> cap) {
+  double lo_u = region.at[0].u, hi_u = lo_u, lo_v = region.at[0].v, hi_v = lo_v, deepest = region.at[0].depth;
+  for (unsigned k = 1; k < region.count; ++k) {
+    lo_u = std::min(lo_u, region.at[k].u), hi_u = std::max(hi_u, region.at[k].u);
+    lo_v = std::min(lo_v, region.at[k].v), hi_v = std::max(hi_v, region.at[k].v);
+    deepest = std::max(deepest, region.at[k].depth);
+  }
+  const double size = window.size;
+  lo_u -= window.u0 + kWiden, hi_u += kWiden - window.u0, lo_v -= window.v0 + kWiden, hi_v += kWiden - window.v0;
+  if (hi_u < 0 || hi_v < 0 || lo_u > size || lo_v > size) return;
+  auto texel = [&](double at) { return uint32_t(std::clamp(std::floor(at), 0.0, size - 1)); };
+  const uint32_t i0 = texel(lo_u), i1 = texel(hi_u), j0 = texel(lo_v), j1 = texel(hi_v);
+  Polygon a, b;
+  for (uint32_t j = j0; j <= j1; ++j)
+    for (uint32_t i = i0; i <= i1; ++i) {
+      const DepthInterval& interval = intervals.at(i, j);
+      if (!(interval.upper > interval.lower && interval.lower < 1.0f)) continue;
+      const double floor_depth = double(interval.lower) + offset;
+      if (deepest < floor_depth) continue;
+      const double su = window.u0 + i, sv = window.v0 + j;
+      clip(region, a, [&](const LightSpacePoint& x) { return x.u - su; });
+      clip(a, b, [&](const LightSpacePoint& x) { return su + 1 - x.u; });
+      clip(b, a, [&](const LightSpacePoint& x) { return x.v - sv; });
+      clip(a, b, [&](const LightSpacePoint& x) { return sv + 1 - x.v; });
+      clip(b, a, [&](const LightSpacePoint& x) { return x.depth - floor_depth; });
+      if (a.count == 0) continue;
+      double shallowest = a.at[0].depth;
+      for (unsigned k = 1; k < a.count; ++k) shallowest = std::min(shallowest, a.at[k].depth);
+      float& slot = cap[size_t(j) * window.size + i];
+      slot = std::min(slot, float(shallowest));
+    }
 }
 
 // Pairs (i < j) of `candidates` whose widened footprint boxes overlap, found by Embree's BVH-BVH
@@ -154,8 +198,7 @@ std::vector<std::pair<uint32_t, uint32_t>> overlapping_pairs(RTCDevice device, c
 }  // namespace
 
 std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
-                                     SecondLayerCapCounts* counts, const TileIntervals* intervals,
-                                     float exit_margin) {
+                                     const TileIntervals& intervals, float exit_margin, SecondLayerCapCounts* counts) {
   const uint32_t size = scene.layout().tile_size();
   const TexelWindow window{double(tile.x) * size, double(tile.y) * size, size};
   std::vector<float> cap(size_t(size) * size, std::numeric_limits<float>::infinity());
@@ -192,16 +235,15 @@ std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& sc
 
   // Per cell, the largest upper a cap could still lower (-inf: nothing to cap in the cell).
   const float kNothing = -std::numeric_limits<float>::infinity();
-  std::vector<float> cell_upper(size_t(cells) * cells, intervals ? kNothing : std::numeric_limits<float>::infinity());
-  if (intervals)
-    for (uint32_t v = 0; v < size; ++v)
-      for (uint32_t u = 0; u < size; ++u) {
-        const DepthInterval& t = intervals->at(u, v);
-        if (t.upper > t.lower && t.lower < 1.0f) {
-          float& slot = cell_upper[size_t(v / kCell) * cells + u / kCell];
-          slot = std::max(slot, t.upper);
-        }
+  std::vector<float> cell_upper(size_t(cells) * cells, kNothing);
+  for (uint32_t v = 0; v < size; ++v)
+    for (uint32_t u = 0; u < size; ++u) {
+      const DepthInterval& t = intervals.at(u, v);
+      if (t.upper > t.lower && t.lower < 1.0f) {
+        float& slot = cell_upper[size_t(v / kCell) * cells + u / kCell];
+        slot = std::max(slot, t.upper);
       }
+    }
   std::vector<std::vector<float>> pyramid{std::move(cell_upper)};
   std::vector<uint32_t> sides{cells};
   while (sides.back() > 1) {
@@ -218,7 +260,6 @@ std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& sc
   }
   // Could a region whose depth is >= `shallowest` change an interval in texels [lo, hi] (global)?
   auto matters = [&](double shallowest, double lo_u, double hi_u, double lo_v, double hi_v) {
-    if (!intervals) return true;
     const float capped = float(shallowest) - exit_margin;  // as apply_exit_caps computes it, at the most
     uint32_t x0 = cell_of(lo_u - window.u0), x1 = cell_of(hi_u - window.u0);
     uint32_t y0 = cell_of(lo_v - window.v0), y1 = cell_of(hi_v - window.v0);
@@ -231,34 +272,51 @@ std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& sc
     return false;
   };
 
+  // Narrowed so the regions found contain the exact ones (the header), the floor lowered likewise.
   const double epsilon = coplanar_epsilon * kEpsilonShrink;
+  const double same_surface = second_layer::kSameSurface * kEpsilonShrink;
+  const double floor_offset =
+      second_layer::near_cover_offset(coplanar_epsilon) - coplanar_epsilon * (1 - kEpsilonShrink);
   Polygon region;
+  // Could `region` (every point at least `shallowest` deep) lower a cap? Counts the skip if not.
+  auto region_matters = [&](double& shallowest) {
+    double lo_u = region.at[0].u, hi_u = lo_u, lo_v = region.at[0].v, hi_v = lo_v;
+    shallowest = region.at[0].depth;
+    for (unsigned k = 1; k < region.count; ++k) {
+      shallowest = std::min(shallowest, region.at[k].depth);
+      lo_u = std::min(lo_u, region.at[k].u), hi_u = std::max(hi_u, region.at[k].u);
+      lo_v = std::min(lo_v, region.at[k].v), hi_v = std::max(hi_v, region.at[k].v);
+    }
+    if (matters(shallowest, lo_u - 1, hi_u + 1, lo_v - 1, hi_v + 1)) return true;
+    ++local.skipped;
+    return false;
+  };
   auto lower_by_region = [&](const Prepared& back, const Prepared& front) {
-    if (!(back.zmax > front.zmin + epsilon)) return;  // nowhere behind it by epsilon
-    // Every point of the region is at least this deep: behind `front`, and on `back`.
-    const double bound = std::max(back.zmin, front.zmin + epsilon);
+    if (!(back.zmax > front.zmin + same_surface)) return;  // nowhere behind it
+    // Every point of either region is at least this deep: behind `front`, and on `back`.
+    const double bound = std::max(back.zmin, front.zmin + same_surface);
     if (!matters(bound, std::max(back.lo_u, front.lo_u) - 1, std::min(back.hi_u, front.hi_u) + 1,
                  std::max(back.lo_v, front.lo_v) - 1, std::min(back.hi_v, front.hi_v) + 1)) {
       ++local.skipped;
       return;
     }
     ++local.pairs_tested;
-    if (!region_behind(back, front, epsilon, region)) return;
-    double shallowest = region.at[0].depth, lo_u = region.at[0].u, hi_u = lo_u, lo_v = region.at[0].v, hi_v = lo_v;
-    for (unsigned k = 1; k < region.count; ++k) {
-      shallowest = std::min(shallowest, region.at[k].depth);
-      lo_u = std::min(lo_u, region.at[k].u), hi_u = std::max(hi_u, region.at[k].u);
-      lo_v = std::min(lo_v, region.at[k].v), hi_v = std::max(hi_v, region.at[k].v);
+    double shallowest = 0;
+    // Behind by epsilon: the second layer wherever it lies.
+    if (back.zmax > front.zmin + epsilon && region_behind(back, front, epsilon, kInfinity, region) &&
+        region_matters(shallowest)) {
+      ++local.regions;
+      for (unsigned k = 1; k + 1 < region.count; ++k)
+        lower_caps_by_triangle(region.at[0], region.at[k], region.at[k + 1], window, cap, &local.texels);
     }
-    if (!matters(shallowest, lo_u - 1, hi_u + 1, lo_v - 1, hi_v + 1)) {
-      ++local.skipped;
-      return;
+    // Near cover: behind by less than epsilon, the second layer below each texel's lower + offset.
+    if (back.zmin <= front.zmax + epsilon && region_behind(back, front, same_surface, epsilon, region) &&
+        region_matters(shallowest)) {
+      ++local.near_regions;
+      lower_caps_above_floor(region, window, intervals, floor_offset, cap);
     }
-    ++local.regions;
-    for (unsigned k = 1; k + 1 < region.count; ++k)
-      lower_caps_by_triangle(region.at[0], region.at[k], region.at[k + 1], window, cap, &local.texels);
   };
-  if (intervals && pyramid.back()[0] == kNothing) candidates.clear();  // no exit in the tile: nothing to cap
+  if (pyramid.back()[0] == kNothing) candidates.clear();  // no exit in the tile: nothing to cap
   for (const auto& [i, j] : overlapping_pairs(device, prepared, candidates, window)) {
     lower_by_region(prepared[i], prepared[j]);
     lower_by_region(prepared[j], prepared[i]);
@@ -267,6 +325,7 @@ std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& sc
     counts->pairs_tested += local.pairs_tested;
     counts->regions += local.regions;
     counts->skipped += local.skipped;
+    counts->near_regions += local.near_regions;
     counts->texels.clipped += local.texels.clipped;
     counts->texels.interior += local.texels.interior;
     counts->texels.fallback += local.texels.fallback;

@@ -7,7 +7,8 @@
 //
 // How: triangle pairs whose footprints overlap (Embree's rtcCollide on their boxes, each pair once) give
 // the convex region of T behind T': T clipped by T''s edges and by z_T - z_T' >= epsilon, exactly in
-// double. Each region's triangle fan lowers the caps of the texels it touches through
+// double; and the near-cover region, z_T - z_T' in [kSameSurface, epsilon], which counts per texel
+// only below the texel's lower + second_layer::near_cover_offset (clipped per texel by that floor). Each region's triangle fan lowers the caps of the texels it touches through
 // lower_caps_by_triangle (exact per-texel clipping, closed form inside). The occluder's edges are
 // widened by 2^-20 texels and the epsilon narrowed by 2^-20 of itself so that the region found here
 // contains the exact one despite rounding: the caps are never above verify's brute-force reference.
@@ -29,19 +30,20 @@ namespace shadowtiles {
 
 struct SecondLayerCapCounts {
   uint64_t pairs_tested = 0;   // footprint-overlapping pairs that passed the depth test
-  uint64_t regions = 0;        // non-empty regions behind another triangle
+  uint64_t regions = 0;        // non-empty regions behind another triangle by the coplanar epsilon
+  uint64_t near_regions = 0;   // non-empty regions behind it by less (near cover)
   uint64_t skipped = 0;        // pairs or regions that could not change a capped interval
   ReceiverCapCounts texels;    // how the regions' texels were resolved
 };
 
 // The cap per texel of `tile` (+inf where no second layer lies in the square); `coplanar_epsilon` in
-// normalised depth (second_layer::coplanar_epsilon).
-// With `intervals` (the tile's centre intervals) and the exit margin, regions that cannot change
+// normalised depth (second_layer::coplanar_epsilon). `intervals` (the tile's centre intervals) give
+// each texel's lower for the near-cover floor; with the exit margin, regions that cannot change
 // apply_exit_caps' result anywhere in their box are skipped: float(shallowest) - margin >= every
 // texel's upper there (texels without an exit have nothing to cap). The caps are then exact only
 // where they matter; apply_exit_caps gives the same intervals as with every region.
 std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
-                                     SecondLayerCapCounts* counts = nullptr, const TileIntervals* intervals = nullptr,
-                                     float exit_margin = 0);
+                                     const TileIntervals& intervals, float exit_margin,
+                                     SecondLayerCapCounts* counts = nullptr);
 
 }  // namespace shadowtiles

@@ -1,0 +1,144 @@
+// The `surfaces` contract's second-layer caps on analytic scenes (docs/receiver-contracts.md), built
+// by the build's fast pass (DualDepthRenderer::render, second_layer_caps) and by verify's brute-force
+// reference (apply_reference_caps on the centre intervals):
+// - near cover: a receiver less than the bias under its occluder on a steep slope, deeper than the
+//   centre's first hit + bias somewhere in the texel, must stay shadowed wherever raw shadows it
+//   (STABILITY.md's bunny finding; without near cover the interval reached the floor and lit it);
+// - exact coplanar duplicates (IFC double faces) on the same slope keep their interval's width.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "builder/dual_depth_renderer.hpp"
+#include "builder/embree_device.hpp"
+#include "builder/light_space_scene.hpp"
+#include "builder/reference_caps.hpp"
+#include "builder/scene.hpp"
+#include "builder/second_layer_rule.hpp"
+
+namespace shadowtiles {
+namespace {
+
+using Triangles = std::vector<std::array<uint32_t, 3>>;
+
+constexpr uint32_t kResolution = 64;
+constexpr double kBiasWorld = 0.016;
+constexpr double kSlope = 0.6;        // world height per world unit along x: ~5 biases per texel
+constexpr double kUnderBy = 0.008;    // the receiver slope lies half a bias under its occluder
+
+double slope_z(double x) { return 2 + kSlope * x; }
+
+// A quad z = slope_z(x) - drop over [x0, x1] x [y0, y1], one-sided (winding flipped by `flip`).
+void add_slope(Scene& scene, const std::string& name, double x0, double x1, double y0, double y1, double drop,
+               bool flip = false) {
+  std::vector<Vec3> v{{x0, y0, slope_z(x0) - drop}, {x1, y0, slope_z(x1) - drop}, {x0, y1, slope_z(x0) - drop},
+                      {x1, y1, slope_z(x1) - drop}};
+  Triangles t{{0, 1, 3}, {0, 3, 2}};
+  if (flip)
+    for (auto& tri : t) std::swap(tri[1], tri[2]);
+  scene.add_mesh(name, v, t);
+}
+
+// Floor at z = 0; y in [0, 4]: an open slope with a second one half a bias under it; y in [6, 10]:
+// the same slope as a back-to-back double face (exact duplicate vertices).
+Scene near_cover_scene() {
+  Scene scene;
+  scene.add_mesh("floor", {{-1, -1, 0}, {11, -1, 0}, {-1, 11, 0}, {11, 11, 0}}, Triangles{{0, 1, 3}, {0, 3, 2}});
+  add_slope(scene, "occluder", 0, 10, 0, 4, 0);
+  add_slope(scene, "receiver", 0.5, 9.5, 0.5, 3.5, kUnderBy);
+  add_slope(scene, "double_face_front", 0, 10, 6, 10, 0);
+  add_slope(scene, "double_face_back", 0, 10, 6, 10, 0, true);
+  return scene;
+}
+
+struct Built {
+  LightFrame frame;
+  DualDepthOptions options;
+  TileIntervals fast;       // render(): centre intervals capped by second_layer_caps
+  TileIntervals reference;  // render_centre() capped by apply_reference_caps
+};
+
+Built build(const Scene& scene) {
+  auto frame = LightFrame::fit({0, 0, -1}, scene.bounds, kResolution);
+  EXPECT_TRUE(frame.ok());
+  auto layout = TileLayout::make(kResolution, kResolution);
+  LightSpaceScene light_scene(scene, *frame, *layout);
+  auto device = EmbreeDevice::create();
+  EXPECT_TRUE(device.ok());
+  const double bias = frame->depth_from_world(kBiasWorld);
+  DualDepthOptions options;
+  options.exit_margin = float(2 * bias);
+  options.cap_exits_at_receiver_surfaces = true;
+  options.receivers = ReceiverContract::surfaces;
+  options.coplanar_epsilon = float(second_layer::coplanar_epsilon(bias));
+  DualDepthRenderer renderer(*device, light_scene, options);
+  auto fast = renderer.render({0, 0});
+  auto centre = renderer.render_centre({0, 0});
+  EXPECT_TRUE(fast.ok() && centre.ok());
+  apply_reference_caps(light_scene, {0, 0}, ReceiverContract::surfaces, second_layer::coplanar_epsilon(bias),
+                       options.exit_margin, *centre);
+  return {*frame, options, std::move(*fast), std::move(*centre)};
+}
+
+struct Leaks {
+  uint64_t raw_shadowed = 0;  // receiver points raw shadows (the truth shadows them all)
+  uint64_t lit_by_upper = 0;  // ... that the interval's upper value lights
+};
+
+// Receivers on the under slope on a fine grid, queried as the client does: lit iff
+// float(depth - bias) <= value.
+Leaks under_slope_leaks(const Built& built, const TileIntervals& intervals) {
+  Leaks leaks;
+  const double bias = built.frame.depth_from_world(kBiasWorld);
+  for (double x = 0.52; x < 9.48; x += 0.013)
+    for (double y = 0.52; y < 3.48; y += 0.029) {
+      const LightSpacePoint p = built.frame.to_light({x, y, slope_z(x) - kUnderBy});
+      const DepthInterval& texel = intervals.at(uint32_t(p.u), uint32_t(p.v));
+      const float threshold = float(p.depth - bias);
+      if (!(threshold > texel.lower)) continue;
+      ++leaks.raw_shadowed;
+      leaks.lit_by_upper += threshold <= texel.upper;
+    }
+  return leaks;
+}
+
+TEST(SecondLayerCaps, ReceiverJustUnderItsOccluderOnASlopeStaysShadowedWhereRawShadowsIt) {
+  const Built built = build(near_cover_scene());
+  for (const auto* intervals : {&built.fast, &built.reference}) {
+    const Leaks leaks = under_slope_leaks(built, *intervals);
+    const char* which = intervals == &built.fast ? "build (second_layer_caps)" : "verify (reference_caps)";
+    EXPECT_GT(leaks.raw_shadowed, 1000u) << which << ": the scene must put receivers deeper than lower + bias";
+    EXPECT_EQ(leaks.lit_by_upper, 0u) << which << ": of " << leaks.raw_shadowed << " raw-shadowed receivers";
+  }
+}
+
+TEST(SecondLayerCaps, ExactDoubleFacesOnASlopeKeepTheirWidth) {
+  const Built built = build(near_cover_scene());
+  const float floor_depth = float(built.frame.to_light({5, 8, 0}).depth);
+  for (const auto* intervals : {&built.fast, &built.reference}) {
+    uint64_t texels = 0, wide = 0;
+    for (double x = 0.5; x < 9.5; x += 0.15625)
+      for (double y = 6.5; y < 9.5; y += 0.15625) {
+        const LightSpacePoint p = built.frame.to_light({x, y, slope_z(x)});
+        const DepthInterval& texel = intervals->at(uint32_t(p.u), uint32_t(p.v));
+        ++texels;
+        // Capped by the floor behind the double face, not by the duplicate itself.
+        wide += texel.upper - texel.lower > 0.5f * (floor_depth - texel.lower);
+      }
+    EXPECT_GT(texels, 500u);
+    EXPECT_EQ(wide, texels) << (intervals == &built.fast ? "build" : "verify");
+  }
+}
+
+TEST(SecondLayerCaps, BuildCapsAreNeverAboveTheReference) {
+  const Built built = build(near_cover_scene());
+  uint64_t above = 0;
+  for (size_t i = 0; i < built.fast.texels.size(); ++i) {
+    const float fast = built.fast.texels[i].upper, reference = built.reference.texels[i].upper;
+    above += fast > std::nextafter(std::nextafter(reference, 2.0f), 2.0f);  // verify's 2-float-step slack
+  }
+  EXPECT_EQ(above, 0u);
+}
+
+}  // namespace
+}  // namespace shadowtiles
