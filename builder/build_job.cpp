@@ -300,12 +300,18 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
                  config.shard->index, config.shard->count, share_begin, share_end, mine.tiles, mine.work,
                  shard_imbalance(plan));
   }
+  std::vector<const TileWork*> todo_work;
   for (const TileWork& w : work) {
     if (w.morton_index < share_begin || w.morton_index >= share_end) continue;
     TileCoord tile = TileLayout::from_morton_index(w.morton_index);
     ++candidates;
-    if (!done.count(tile)) todo.push_back(tile);
+    if (!done.count(tile)) todo_work.push_back(&w);
   }
+  // Largest estimated work first, so the last tiles are small ones and no worker idles while another
+  // finishes a big tile (the tiles' blobs do not depend on the order they are built in).
+  std::stable_sort(todo_work.begin(), todo_work.end(),
+                   [](const TileWork* a, const TileWork* b) { return a->work() > b->work(); });
+  for (const TileWork* w : todo_work) todo.push_back(TileLayout::from_morton_index(w->morton_index));
   double index_seconds = seconds_since(index_start);
   spdlog::info("{} of {} tiles have triangles ({} triangle references); {} already committed, {} to render",
                candidates, layout->tile_count(), light_scene.triangle_references(), candidates - todo.size(),
