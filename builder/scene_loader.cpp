@@ -9,7 +9,6 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <cctype>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -20,6 +19,8 @@
 #include <new>
 #include <unordered_map>
 #include <unordered_set>
+
+#include "builder/mesh_file_prechecks.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -209,134 +210,6 @@ Result<Scene> convert(const aiScene& ai, const std::filesystem::path& file, Heig
   return scene;
 }
 
-// Guards in front of assimp 5.2 for files that would make it hang or exhaust memory (found by the
-// truncation and assimp-testmodels "invalid" tests):
-// - PLY without an "end_header" line (a truncated header): the parser loops forever.
-// - PLY or OFF element counts far beyond what the file can hold: assimp allocates and walks them
-//   (OutOfMemory.off: 16 GB and minutes). Every element needs a minimum number of bytes, so the
-//   counts are bounded by the file size.
-std::string read_head(const std::filesystem::path& file, size_t limit) {
-  std::ifstream in(file, std::ios::binary);
-  std::string head(limit, '\0');
-  in.read(head.data(), std::streamsize(head.size()));
-  head.resize(size_t(std::max<std::streamsize>(0, in.gcount())));
-  return head;
-}
-
-// Parses a non-negative decimal integer, saturating (the values are only compared with sizes).
-bool parse_count(std::string_view text, uint64_t* value) {
-  if (text.empty()) return false;
-  uint64_t v = 0;
-  for (char c : text) {
-    if (c < '0' || c > '9') return false;
-    v = v > (UINT64_MAX - 9) / 10 ? UINT64_MAX : v * 10 + uint64_t(c - '0');
-  }
-  *value = v;
-  return true;
-}
-
-std::vector<std::string_view> split_words(std::string_view line) {
-  std::vector<std::string_view> words;
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
-    const size_t start = i;
-    while (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i]))) ++i;
-    if (i > start) words.push_back(line.substr(start, i - start));
-  }
-  return words;
-}
-
-uint64_t saturating_mul_add(uint64_t sum, uint64_t count, uint64_t size) {
-  if (size != 0 && count > (UINT64_MAX - sum) / size) return UINT64_MAX;
-  return sum + count * size;
-}
-
-Status check_ply(const std::filesystem::path& file, uint64_t file_size) {
-  const std::string head = read_head(file, 1 << 20);
-  auto fail = [&](const std::string& why) {
-    return make_error(ErrorCode::invalid_input, fmt::format("{}: PLY: {}", file.string(), why));
-  };
-  if (head.rfind("ply", 0) != 0 || head.size() < 4 || (head[3] != '\n' && head[3] != '\r'))
-    return fail("missing the 'ply' magic line");
-  bool ascii = true;
-  uint64_t minimum = 0;  // bytes the declared elements need at least
-  uint64_t element_count = 0, element_bytes = 0;
-  size_t pos = 0;
-  while (pos < head.size()) {
-    size_t end = head.find('\n', pos);
-    if (end == std::string::npos) break;
-    const std::string_view line = std::string_view(head).substr(pos, end - pos);
-    // assimp splits header words on spaces and tabs only and ends lines at \r, \n, \f or NUL: a
-    // line "end_header\v..." passes a check that splits on isspace, then makes assimp 5.2 seek
-    // for ever (found by fuzz_scene_loader). The header is text: refuse any other control byte.
-    for (char c : line)
-      if ((static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\r') || c == 0x7f)
-        return fail(fmt::format("control character 0x{:02x} in the header", static_cast<unsigned char>(c)));
-    const auto words = split_words(line);
-    pos = end + 1;
-    if (words.empty()) continue;
-    // The PLY header has these keywords only. assimp 5.2 spends seconds of seeking per unknown
-    // line (a 1.6 KB file took 32 s; found by fuzz_scene_loader): refuse them up front.
-    static constexpr std::string_view kKeywords[] = {"ply", "format", "comment", "obj_info", "element", "property",
-                                                     "end_header"};
-    if (std::find(std::begin(kKeywords), std::end(kKeywords), words[0]) == std::end(kKeywords))
-      return fail(fmt::format("unknown header keyword '{}'", words[0].substr(0, 32)));
-    if (words[0] == "format" && words.size() > 1) {
-      ascii = words[1] == "ascii";
-    } else if (words[0] == "element" && words.size() > 2) {
-      minimum = saturating_mul_add(minimum, element_count, element_bytes);
-      if (!parse_count(words[2], &element_count)) return fail("bad element count");
-      element_bytes = 0;
-    } else if (words[0] == "property" && words.size() > 2) {
-      // Smallest encoding of one property: ascii "0 " = 2 bytes; binary: the scalar, or a list's count.
-      const std::string_view type = words[1] == "list" ? words[2] : words[1];
-      uint64_t bytes = 1;
-      if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") bytes = 2;
-      if (type == "int" || type == "uint" || type == "int32" || type == "uint32" || type == "float" ||
-          type == "float32")
-        bytes = 4;
-      if (type == "double" || type == "float64") bytes = 8;
-      element_bytes += ascii ? 2 : bytes;
-    } else if (words[0] == "end_header") {
-      minimum = saturating_mul_add(minimum, element_count, element_bytes);
-      if (minimum > file_size - std::min<uint64_t>(file_size, pos))
-        return fail(fmt::format(
-            "the header declares at least {} bytes of data, the file has {} (truncated or corrupt)", minimum,
-            file_size - std::min<uint64_t>(file_size, pos)));
-      return Status::success();
-    }
-  }
-  return fail("header not terminated by an 'end_header' line (truncated file?)");
-}
-
-Status check_off(const std::filesystem::path& file, uint64_t file_size) {
-  const std::string head = read_head(file, 1 << 16);
-  std::vector<std::string_view> counts;
-  size_t pos = 0;
-  bool keyword_seen = false;
-  while (pos < head.size() && counts.size() < 2) {
-    size_t end = head.find('\n', pos);
-    if (end == std::string::npos) end = head.size();
-    auto words = split_words(std::string_view(head).substr(pos, end - pos));
-    pos = end + 1;
-    if (words.empty() || words[0][0] == '#') continue;
-    size_t first = 0;
-    if (!keyword_seen && words[0].find("OFF") != std::string_view::npos) first = 1;  // OFF, COFF, NOFF...
-    keyword_seen = true;
-    for (size_t w = first; w < words.size() && counts.size() < 2; ++w) counts.push_back(words[w]);
-  }
-  uint64_t vertices = 0, faces = 0;
-  if (counts.size() < 2 || !parse_count(counts[0], &vertices) || !parse_count(counts[1], &faces))
-    return Status::success();  // not our business: assimp reports the syntax error
-  // A vertex takes at least "0 0 0\n", a face at least "0\n".
-  if (saturating_mul_add(saturating_mul_add(0, vertices, 6), faces, 2) > file_size)
-    return make_error(ErrorCode::invalid_input,
-                      fmt::format("{}: OFF: {} vertices and {} faces cannot fit in {} bytes (corrupt counts)",
-                                  file.string(), vertices, faces, file_size));
-  return Status::success();
-}
-
 Result<Scene> import_with_assimp(const std::filesystem::path& file, const std::string& extension,
                                  HeightfieldMatcher& matcher) {
   install_assimp_logger();
@@ -353,9 +226,9 @@ Result<Scene> import_with_assimp(const std::filesystem::path& file, const std::s
   const uint64_t file_size = std::filesystem::file_size(file, ec);
   if (ec) return make_error(ErrorCode::io_error, fmt::format("{}: {}", file.string(), ec.message()));
   if (extension == ".ply")
-    if (Status ok = check_ply(file, file_size); !ok) return ok.error();
+    if (Status ok = check_ply_file(file, file_size); !ok) return ok.error();
   if (extension == ".off")
-    if (Status ok = check_off(file, file_size); !ok) return ok.error();
+    if (Status ok = check_off_file(file, file_size); !ok) return ok.error();
 
   // Skeleton placeholder meshes some importers invent are not geometry.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);

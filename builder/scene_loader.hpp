@@ -35,9 +35,10 @@
 // Thread safety: load_scene may run concurrently on different files (one assimp Importer each).
 // Untrusted input: meant to be safe (no crash, no hang, errors returned), but assimp's parsers are
 // the weak point. Done here: assimp exceptions and bad_alloc are caught, assimp's data-structure
-// validation runs, every index is checked; PLY headers without "end_header" (which hang assimp 5.2)
-// and PLY/OFF element counts beyond what the file size can hold (which make assimp allocate
-// gigabytes) are rejected before assimp sees them; .ter is parsed by our own bounds-checked reader.
+// validation runs, every index is checked; PLY and OFF files are checked against what their headers
+// declare before assimp sees them (builder/mesh_file_prechecks.hpp: headers that hang assimp 5.2,
+// element and list counts that would make it allocate gigabytes); .ter is parsed by our own
+// bounds-checked reader.
 // Known left: assimp's PLY importer leaks its parse tree when a binary file ends early (bounded by
 // the file size), and formats not listed above may still make assimp use much memory or time.
 #pragma once

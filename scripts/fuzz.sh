@@ -2,12 +2,14 @@
 # Runs every libFuzzer target (fuzz/, see fuzz/README.md) under ASan + UBSan, seeded from real builds
 # of the shared scenes (scripts/fuzz_corpus.py), after replaying the committed crash regressions
 # (fuzz/regressions/<target>/*).
-# Usage: scripts/fuzz.sh [--ci | --long] [--runs N] [--time S] [--jobs J] [TARGET...]
-#   --ci     (default) 100,000 executions per target (fuzz_http 30,000 and fuzz_scene_loader 10,000:
+# Usage: scripts/fuzz.sh [--ci | --long] [--runs N] [--time S] [--jobs J] [--seed S] [TARGET...]
+#   --ci     (default) 100,000 executions per target, seeded (-seed=1: CI sees the same mutations on
+#            every run, so a CI failure reproduces and a green CI is not luck; --long explores) (fuzz_http 30,000 and fuzz_scene_loader 10,000:
 #            each of their executions runs httplib or assimp, 10-50x a decoder's cost), each target
 #            capped at --time 45 s; CI runs this (<= 12 x 45 s / 2 jobs = 4.5 min of fuzzing)
 #   --long   1,000,000 executions per target, each capped at 3 h (ctest label `long`: fuzz_long)
 #   --jobs   targets fuzzed at once (default 2, the CI machine's cores)
+#   --seed   libFuzzer's -seed (default: 1 in --ci mode, random in --long mode)
 # Builds what it needs: the Release CLI in build/ (for the seed stores) when missing, the fuzz
 # targets in build-fuzz/ (clang, -DSHADOWTILES_FUZZ=ON, assertions on).
 # Writes build-fuzz/fuzz-work/summary.tsv (target, runs asked, runs done, seconds, execs/s, crashes,
@@ -21,15 +23,17 @@ mode=ci
 runs=
 max_time=45
 jobs=2
+seed=
 targets=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --ci) mode=ci; max_time=45 ;;
+    --seed) seed="$2"; shift ;;
     --long) mode=long; max_time=10800 ;;
     --runs) runs="$2"; shift ;;
     --time) max_time="$2"; shift ;;
     --jobs) jobs="$2"; shift ;;
-    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,18p' "$0"; exit 0 ;;
     -*) echo "fuzz.sh: unknown option $1" >&2; exit 2 ;;
     *) targets+=("$1") ;;
   esac
@@ -88,9 +92,11 @@ fuzz_one() {
     fi
   fi
   mkdir -p "$work/evolved/$target"
+  local seed_flag=()
+  if [ -n "$seed" ]; then seed_flag=(-seed="$seed"); elif [ "$mode" = ci ]; then seed_flag=(-seed=1); fi
   local status=0 t0
   t0=$(date +%s)
-  ASAN_OPTIONS="$asan" nice -n 10 "$exe" -runs="$want" -max_total_time="$max_time" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+  ASAN_OPTIONS="$asan" nice -n 10 "$exe" -runs="$want" -max_total_time="$max_time" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 "${seed_flag[@]}" \
     -artifact_prefix="$work/artifacts/$target-" "${extra[@]}" "$work/evolved/$target" "$work/corpus/$target" \
     > "$log" 2>&1 || status=$?
   local done_runs rate rss

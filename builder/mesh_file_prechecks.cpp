@@ -1,0 +1,352 @@
+#include "builder/mesh_file_prechecks.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cstring>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace shadowtiles {
+namespace {
+
+std::string read_head(const std::filesystem::path& file, size_t limit) {
+  std::ifstream in(file, std::ios::binary);
+  std::string head(limit, '\0');
+  in.read(head.data(), std::streamsize(head.size()));
+  head.resize(size_t(std::max<std::streamsize>(0, in.gcount())));
+  return head;
+}
+
+// Parses a non-negative decimal integer, saturating (the values are only compared with sizes).
+bool parse_count(std::string_view text, uint64_t* value) {
+  if (text.empty()) return false;
+  uint64_t v = 0;
+  for (char c : text) {
+    if (c < '0' || c > '9') return false;
+    v = v > (UINT64_MAX - 9) / 10 ? UINT64_MAX : v * 10 + uint64_t(c - '0');
+  }
+  *value = v;
+  return true;
+}
+
+std::vector<std::string_view> split_words(std::string_view line) {
+  std::vector<std::string_view> words;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+    const size_t start = i;
+    while (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+    if (i > start) words.push_back(line.substr(start, i - start));
+  }
+  return words;
+}
+
+uint64_t saturating_mul_add(uint64_t sum, uint64_t count, uint64_t size) {
+  if (size != 0 && count > (UINT64_MAX - sum) / size) return UINT64_MAX;
+  return sum + count * size;
+}
+
+// ---- PLY ----
+
+struct PlyScalarType {
+  uint8_t bytes = 0;  // 0: not a PLY type
+  bool is_signed = false;
+  bool is_integer = false;
+};
+
+PlyScalarType ply_type(std::string_view name) {
+  static constexpr std::array<std::pair<std::string_view, PlyScalarType>, 16> kTypes{{
+      {"char", {1, true, true}},     {"int8", {1, true, true}},     {"uchar", {1, false, true}},
+      {"uint8", {1, false, true}},   {"short", {2, true, true}},    {"int16", {2, true, true}},
+      {"ushort", {2, false, true}},  {"uint16", {2, false, true}},  {"int", {4, true, true}},
+      {"int32", {4, true, true}},    {"uint", {4, false, true}},    {"uint32", {4, false, true}},
+      {"float", {4, true, false}},   {"float32", {4, true, false}}, {"double", {8, true, false}},
+      {"float64", {8, true, false}},
+  }};
+  for (const auto& [key, type] : kTypes)
+    if (key == name) return type;
+  return {};
+}
+
+struct PlyProperty {
+  bool is_list = false;
+  PlyScalarType count;  // lists only
+  PlyScalarType value;  // the scalar, or a list's items
+};
+
+struct PlyElement {
+  std::string name;
+  uint64_t count = 0;
+  std::vector<PlyProperty> properties;
+  bool has_list() const {
+    return std::any_of(properties.begin(), properties.end(), [](const PlyProperty& p) { return p.is_list; });
+  }
+  uint64_t fixed_bytes() const {  // binary bytes of one instance when it has no list
+    uint64_t bytes = 0;
+    for (const PlyProperty& p : properties) bytes += p.value.bytes;
+    return bytes;
+  }
+};
+
+enum class PlyFormat { ascii, binary_little_endian, binary_big_endian };
+
+struct PlyHeader {
+  PlyFormat format = PlyFormat::ascii;
+  std::vector<PlyElement> elements;
+  uint64_t body_offset = 0;
+};
+
+// Sequential reads of a file through a buffer, with skips that only seek.
+class FileCursor {
+ public:
+  FileCursor(const std::filesystem::path& file, uint64_t offset, uint64_t size)
+      : in_(file, std::ios::binary), position_(offset), size_(size) {}
+  bool is_open() const { return bool(in_); }
+  uint64_t left() const { return size_ - std::min(size_, position_); }
+  uint64_t position() const { return position_; }
+  void skip(uint64_t bytes) { position_ += bytes; }
+  // Reads `bytes` (<= 8) at the cursor; false at the end of the file.
+  bool read(void* out, size_t bytes) {
+    if (left() < bytes) return false;
+    if (position_ < buffer_start_ || position_ + bytes > buffer_start_ + buffer_.size()) {
+      in_.clear();
+      in_.seekg(std::streamoff(position_));
+      buffer_.resize(kBufferBytes);
+      in_.read(buffer_.data(), std::streamsize(buffer_.size()));
+      buffer_.resize(size_t(std::max<std::streamsize>(0, in_.gcount())));
+      buffer_start_ = position_;
+      if (buffer_.size() < bytes) return false;
+    }
+    std::memcpy(out, buffer_.data() + (position_ - buffer_start_), bytes);
+    position_ += bytes;
+    return true;
+  }
+
+ private:
+  static constexpr size_t kBufferBytes = 1 << 16;
+  std::ifstream in_;
+  std::vector<char> buffer_;
+  uint64_t buffer_start_ = 0;
+  uint64_t position_;
+  uint64_t size_;
+};
+
+// A binary list count, in the file's byte order; nullopt for a negative count.
+std::optional<uint64_t> decode_count(const unsigned char* bytes, PlyScalarType type, bool big_endian) {
+  uint64_t v = 0;
+  for (unsigned i = 0; i < type.bytes; ++i) {
+    const unsigned byte = big_endian ? bytes[i] : bytes[type.bytes - 1 - i];
+    v = (v << 8) | byte;
+  }
+  if (type.is_signed && (v >> (8 * type.bytes - 1)) != 0) return std::nullopt;
+  return v;
+}
+
+class PlyChecker {
+ public:
+  PlyChecker(const std::filesystem::path& file, uint64_t file_size) : file_(file), file_size_(file_size) {}
+
+  Status run() {
+    if (Status ok = parse_header(); !ok) return ok;
+    return header_.format == PlyFormat::ascii ? walk_ascii() : walk_binary();
+  }
+
+ private:
+  Error fail(const std::string& why) const {
+    return make_error(ErrorCode::invalid_input, fmt::format("{}: PLY: {}", file_.string(), why));
+  }
+
+  Status parse_header() {
+    const std::string head = read_head(file_, 1 << 20);
+    if (head.rfind("ply", 0) != 0 || head.size() < 4 || (head[3] != '\n' && head[3] != '\r'))
+      return fail("missing the 'ply' magic line");
+    uint64_t minimum = 0;  // bytes the declared elements need at least
+    size_t pos = 0;
+    while (pos < head.size()) {
+      const size_t end = head.find('\n', pos);
+      if (end == std::string::npos) break;
+      const std::string_view line = std::string_view(head).substr(pos, end - pos);
+      // assimp splits header words on spaces and tabs only and ends lines at \r, \n, \f or NUL: a
+      // line "end_header\v..." passes a check that splits on isspace, then makes assimp 5.2 seek
+      // for ever. The header is text: refuse any other control byte.
+      for (char c : line)
+        if ((static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\r') || c == 0x7f)
+          return fail(fmt::format("control character 0x{:02x} in the header", static_cast<unsigned char>(c)));
+      const auto words = split_words(line);
+      pos = end + 1;
+      if (words.empty()) continue;
+      // assimp 5.2 spends seconds of seeking per unknown header line (a 1.6 KB file took 32 s).
+      static constexpr std::string_view kKeywords[] = {"ply",     "format",   "comment",   "obj_info",
+                                                       "element", "property", "end_header"};
+      if (std::find(std::begin(kKeywords), std::end(kKeywords), words[0]) == std::end(kKeywords))
+        return fail(fmt::format("unknown header keyword '{}'", words[0].substr(0, 32)));
+      if (words[0] == "format" && words.size() > 1) {
+        if (words[1] == "ascii") header_.format = PlyFormat::ascii;
+        else if (words[1] == "binary_little_endian") header_.format = PlyFormat::binary_little_endian;
+        else if (words[1] == "binary_big_endian") header_.format = PlyFormat::binary_big_endian;
+        else return fail(fmt::format("unknown format '{}'", words[1].substr(0, 32)));
+      } else if (words[0] == "element" && words.size() > 2) {
+        PlyElement element;
+        element.name = std::string(words[1].substr(0, 32));
+        if (!parse_count(words[2], &element.count)) return fail("bad element count");
+        header_.elements.push_back(std::move(element));
+      } else if (words[0] == "property" && words.size() > 2) {
+        if (header_.elements.empty()) return fail("a property before any element");
+        PlyProperty property;
+        property.is_list = words[1] == "list";
+        if (property.is_list) {
+          if (words.size() < 4) return fail("a list property without its two types");
+          property.count = ply_type(words[2]);
+          property.value = ply_type(words[3]);
+          if (property.count.bytes == 0 || property.value.bytes == 0)
+            return fail(fmt::format("unknown list types '{} {}'", words[2].substr(0, 32), words[3].substr(0, 32)));
+          if (!property.count.is_integer) return fail("a list count type that is not an integer type");
+        } else {
+          property.value = ply_type(words[1]);
+          if (property.value.bytes == 0) return fail(fmt::format("unknown property type '{}'", words[1].substr(0, 32)));
+        }
+        header_.elements.back().properties.push_back(property);
+      } else if (words[0] == "end_header") {
+        header_.body_offset = pos;
+        // Smallest encoding of one property: ascii "0 " = 2 bytes; binary: the scalar, or a list's count.
+        for (const PlyElement& element : header_.elements) {
+          uint64_t bytes = 0;
+          for (const PlyProperty& p : element.properties)
+            bytes += header_.format == PlyFormat::ascii ? 2 : (p.is_list ? p.count.bytes : p.value.bytes);
+          minimum = saturating_mul_add(minimum, element.count, bytes);
+        }
+        const uint64_t body = file_size_ - std::min<uint64_t>(file_size_, pos);
+        if (minimum > body)
+          return fail(fmt::format(
+              "the header declares at least {} bytes of data, the file has {} (truncated or corrupt)", minimum, body));
+        return Status::success();
+      }
+    }
+    return fail("header not terminated by an 'end_header' line (truncated file?)");
+  }
+
+  Status walk_binary() {
+    FileCursor cursor(file_, header_.body_offset, file_size_);
+    if (!cursor.is_open()) return make_error(ErrorCode::io_error, fmt::format("{}: cannot open", file_.string()));
+    const bool big_endian = header_.format == PlyFormat::binary_big_endian;
+    auto truncated = [&](const PlyElement& element, uint64_t instance) {
+      return fail(fmt::format("the body ends inside element '{}' #{} of {} (truncated file)", element.name, instance,
+                              element.count));
+    };
+    for (const PlyElement& element : header_.elements) {
+      if (!element.has_list()) {  // fixed-size instances: one step
+        const uint64_t bytes = saturating_mul_add(0, element.count, element.fixed_bytes());
+        if (bytes > cursor.left()) return truncated(element, cursor.left() / std::max<uint64_t>(1, element.fixed_bytes()));
+        cursor.skip(bytes);
+        continue;
+      }
+      for (uint64_t instance = 0; instance < element.count; ++instance) {
+        for (const PlyProperty& p : element.properties) {
+          if (!p.is_list) {
+            if (cursor.left() < p.value.bytes) return truncated(element, instance);
+            cursor.skip(p.value.bytes);
+            continue;
+          }
+          unsigned char raw[8];
+          if (!cursor.read(raw, p.count.bytes)) return truncated(element, instance);
+          const auto items = decode_count(raw, p.count, big_endian);
+          if (!items)
+            return fail(fmt::format("element '{}' #{}: a negative list count (corrupt file)", element.name, instance));
+          const uint64_t bytes = saturating_mul_add(0, *items, p.value.bytes);
+          if (bytes > cursor.left())
+            return fail(fmt::format("element '{}' #{}: a list of {} items ({} bytes) cannot fit in the {} bytes "
+                                    "left (corrupt count)",
+                                    element.name, instance, *items, bytes, cursor.left()));
+          cursor.skip(bytes);
+        }
+      }
+    }
+    return Status::success();
+  }
+
+  // One instance per line, as assimp 5.2 reads ascii bodies. Only list counts are checked (each must
+  // fit in its line's remaining words); other oddities are left to assimp's own errors.
+  Status walk_ascii() {
+    std::ifstream in(file_, std::ios::binary);
+    if (!in) return make_error(ErrorCode::io_error, fmt::format("{}: cannot open", file_.string()));
+    in.seekg(std::streamoff(header_.body_offset));
+    std::string line;
+    uint64_t line_number = 0;
+    for (const PlyElement& element : header_.elements) {
+      if (!element.has_list()) {  // skip its lines unread
+        for (uint64_t instance = 0; instance < element.count; ++instance) {
+          if (!std::getline(in, line)) return Status::success();
+          ++line_number;
+        }
+        continue;
+      }
+      for (uint64_t instance = 0; instance < element.count; ++instance) {
+        if (!std::getline(in, line)) return Status::success();
+        ++line_number;
+        const auto words = split_words(line);
+        size_t word = 0;
+        for (const PlyProperty& p : element.properties) {
+          if (word >= words.size()) break;
+          if (!p.is_list) {
+            ++word;
+            continue;
+          }
+          uint64_t items = 0;
+          if (!parse_count(words[word], &items)) break;  // not a plain count: assimp reports it
+          ++word;
+          if (items > words.size() - word)
+            return fail(fmt::format("element '{}' #{} (body line {}): a list of {} items on a line that holds {} more "
+                                    "words (corrupt count)",
+                                    element.name, instance, line_number, items, words.size() - word));
+          word += size_t(items);
+        }
+      }
+    }
+    return Status::success();
+  }
+
+  const std::filesystem::path& file_;
+  const uint64_t file_size_;
+  PlyHeader header_;
+};
+
+}  // namespace
+
+Status check_ply_file(const std::filesystem::path& file, uint64_t file_size) {
+  return PlyChecker(file, file_size).run();
+}
+
+Status check_off_file(const std::filesystem::path& file, uint64_t file_size) {
+  const std::string head = read_head(file, 1 << 16);
+  std::vector<std::string_view> counts;
+  size_t pos = 0;
+  bool keyword_seen = false;
+  while (pos < head.size() && counts.size() < 2) {
+    size_t end = head.find('\n', pos);
+    if (end == std::string::npos) end = head.size();
+    auto words = split_words(std::string_view(head).substr(pos, end - pos));
+    pos = end + 1;
+    if (words.empty() || words[0][0] == '#') continue;
+    size_t first = 0;
+    if (!keyword_seen && words[0].find("OFF") != std::string_view::npos) first = 1;  // OFF, COFF, NOFF...
+    keyword_seen = true;
+    for (size_t w = first; w < words.size() && counts.size() < 2; ++w) counts.push_back(words[w]);
+  }
+  uint64_t vertices = 0, faces = 0;
+  if (counts.size() < 2 || !parse_count(counts[0], &vertices) || !parse_count(counts[1], &faces))
+    return Status::success();  // not our business: assimp reports the syntax error
+  // A vertex takes at least "0 0 0\n", a face at least "0\n".
+  if (saturating_mul_add(saturating_mul_add(0, vertices, 6), faces, 2) > file_size)
+    return make_error(ErrorCode::invalid_input,
+                      fmt::format("{}: OFF: {} vertices and {} faces cannot fit in {} bytes (corrupt counts)",
+                                  file.string(), vertices, faces, file_size));
+  return Status::success();
+}
+
+}  // namespace shadowtiles
