@@ -4,14 +4,11 @@
 #include <xxhash.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstring>
 #include <cstdio>
-#include <mutex>
-#include <set>
-#include <thread>
+#include <map>
+#include <memory>
 
 #include <spdlog/spdlog.h>
 
@@ -20,18 +17,13 @@
 #include "builder/file_hash.hpp"
 #include "builder/light_space_scene.hpp"
 #include "builder/second_layer_rule.hpp"
-#include "builder/tile_encoder.hpp"
+#include "builder/tile_pipeline.hpp"
 #include "builder/tile_coverage_estimate.hpp"
-#include "builder/tile_preview_builder.hpp"
 #include "builder/top_levels.hpp"
 #include "codec/store_meta.hpp"
-#include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
 #include "store/serving_lock.hpp"
 #include "store/store_layout.hpp"
-#include "store/tile_info.hpp"
-#include "store/tile_key.hpp"
-#include "store/tile_preview.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -94,20 +86,6 @@ nlohmann::json build_identity(const BuildConfig& config, uint64_t scene_hash, ui
   return identity;
 }
 
-struct WorkerTotals {
-  DualDepthStats depth;
-  double encode_seconds = 0;
-  double store_seconds = 0;
-  uint64_t stored_tiles = 0;
-  uint64_t blob_bytes = 0;
-  uint64_t preview_bytes = 0;
-  double preview_seconds = 0;
-  std::map<std::string, uint64_t> bytes_by_method;
-  std::map<std::string, uint64_t> raw_bytes_by_method;
-  std::map<std::string, uint64_t> reference_bytes_by_method;
-  std::map<std::string, double> encode_seconds_by_method;
-};
-
 // One line when most triangles are one-sided under the `anywhere` contract: their texels get
 // zero-width intervals, which the MH family cannot compress.
 void log_open_mesh_hint(const Scene& scene) {
@@ -150,17 +128,21 @@ std::string shard_name(const std::optional<ShardInfo>& shard) {
   return shard ? "shard " + std::to_string(shard->index) + "/" + std::to_string(shard->count) : "a whole build";
 }
 
-}  // namespace
+// ---- Phases of run_build (docs/architecture.md §9) ----
 
-Result<BuildSummary> run_build(const BuildConfig& config) {
-  auto total_start = Clock::now();
-  if (Status status = validate(config); !status) return status.error();
+// Phase 1, prepare: what the scene and the config define (no store touched yet).
+struct PreparedBuild {
+  Scene scene;
+  LoadStats load_stats;
+  LightFrame frame;
+  TileLayout layout;
+  std::string config_hash;
+};
 
-  // Load.
+Result<PreparedBuild> prepare(const BuildConfig& config) {
   LoadStats load_stats;
   auto scene = load_scene(config.scene_path, config.load, &load_stats);
   if (!scene) return scene.error();
-
   uint32_t resolution = 0;
   if (config.resolution) {
     resolution = *config.resolution;
@@ -178,45 +160,53 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   if (!layout) return layout.error();
   spdlog::info("light frame: {}^2 texels of {:.6g} world units, {}^2 tiles of {}^2, depth range {:.6g}",
                resolution, frame->texel_size(), layout->tiles_per_side(), layout->tile_size(), frame->depth_range());
-
   log_open_mesh_hint(*scene);
-
   auto scene_hash = hash_file(config.scene_path);
   if (!scene_hash) return scene_hash.error();
-  std::string config_hash =
-      hex64(XXH64(build_identity(config, *scene_hash, resolution, layout->tile_size()).dump().data(),
-                  build_identity(config, *scene_hash, resolution, layout->tile_size()).dump().size(), 0));
+  const std::string identity = build_identity(config, *scene_hash, resolution, layout->tile_size()).dump();
+  return PreparedBuild{std::move(*scene), load_stats, *frame, *layout,
+                       hex64(XXH64(identity.data(), identity.size(), 0))};
+}
 
-  if (config.shard && config.plan_shards_only)
-    return make_error(ErrorCode::invalid_input, "give --shard or --plan-shards, not both");
-  if (config.plan_shards_only) {
-    LightSpaceScene light_scene(*scene, *frame, *layout);
-    auto work = candidate_work(light_scene, *layout);
-    auto plan = plan_shards(work, layout->tile_count(), config.plan_shards_only);
-    BuildSummary summary;
-    summary.tiles_total = layout->tile_count();
-    summary.tiles_candidate = work.size();
-    summary.stats = {{"config_hash", config_hash}, {"tiles", {{"total", summary.tiles_total}, {"with_triangles", work.size()}}},
-                     {"triangle_references", light_scene.triangle_references()},
-                     {"covered_texels_estimate", covered_texels_estimate(work)},
-                     {"shard_plan", plan_json(plan)}, {"imbalance", shard_imbalance(plan)}};
-    return summary;
-  }
+// --plan-shards N: the shard plan only, nothing built.
+BuildSummary plan_only(const BuildConfig& config, const PreparedBuild& build) {
+  LightSpaceScene light_scene(build.scene, build.frame, build.layout);
+  auto work = candidate_work(light_scene, build.layout);
+  auto plan = plan_shards(work, build.layout.tile_count(), config.plan_shards_only);
+  BuildSummary summary;
+  summary.tiles_total = build.layout.tile_count();
+  summary.tiles_candidate = work.size();
+  summary.stats = {{"config_hash", build.config_hash},
+                   {"tiles", {{"total", summary.tiles_total}, {"with_triangles", work.size()}}},
+                   {"triangle_references", light_scene.triangle_references()},
+                   {"covered_texels_estimate", covered_texels_estimate(work)},
+                   {"shard_plan", plan_json(plan)},
+                   {"imbalance", shard_imbalance(plan)}};
+  return summary;
+}
 
-  // Store: refuse to mix builds; resume the same one.
+// Phase 2, open/resume: the store, locked against servers; a different build is refused (or cleared
+// with --overwrite), the same build (and the same share of it) is resumed.
+struct OpenedStore {
+  std::unique_ptr<store::Store> db;
+  store::ServingLock serving_lock;  // held until the build ends (store/serving_lock.hpp)
+  bool had_meta = false;
+};
+
+Result<OpenedStore> open_or_resume(const BuildConfig& config, const std::string& config_hash) {
   store::Store::Options store_options;
   store_options.mode = store::Store::Mode::read_write;
   store_options.initial_map_size = config.initial_map_size;
   store_options.no_sync = true;  // one forced sync at the end (docs/architecture.md §9)
   auto opened = store::Store::open(config.store_path, store_options);
   if (!opened) return opened.error();
-  // Never rewrite a store a server answers from (store/serving_lock.hpp); held until the build ends.
   auto serving_lock = store::ServingLock::acquire(config.store_path, store::ServingLock::Kind::build);
   if (!serving_lock) return serving_lock.error();
   store::Store& db = **opened;
   auto existing = db.get(store::Database::meta, store::as_bytes(kMetaBuildKey));
   if (!existing) return existing.error();
-  if (existing->has_value()) {
+  const bool had_meta = existing->has_value();
+  if (had_meta) {
     auto old_meta = StoreMeta::parse(std::string_view(reinterpret_cast<const char*>((*existing)->data()),
                                                       (*existing)->size()));
     bool same = old_meta && old_meta->config_hash == config_hash;
@@ -240,36 +230,48 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
                               " holds a different build; pass --overwrite or choose another --out");
       spdlog::warn("overwriting the build in {}", config.store_path.string());
       for (auto which : {store::Database::meta, store::Database::tiles, store::Database::top,
-                         store::Database::progress, store::Database::preview,
-                         store::Database::tileinfo})
+                         store::Database::progress, store::Database::preview, store::Database::tileinfo})
         if (Status s = db.clear(which); !s) return s.error();
     }
   }
+  return OpenedStore{std::move(*opened), std::move(*serving_lock), had_meta};
+}
 
+StoreMeta initial_meta(const BuildConfig& config, const PreparedBuild& build) {
   StoreMeta meta;
   meta.builder_version = builder_version();
-  meta.config_hash = config_hash;
+  meta.config_hash = build.config_hash;
   meta.scene_path = config.scene_path.string();
-  meta.scene_triangles = scene->triangle_count();
+  meta.scene_triangles = build.scene.triangle_count();
   meta.up_axis = config.load.up == UpAxis::y ? "y" : "z";
   meta.heightfield_meshes = config.load.heightfield_meshes;
-  meta.scene_bounds = scene->bounds;
-  meta.light_direction = frame->direction();
-  meta.light_origin = frame->origin();
-  meta.light_extent = frame->extent();
-  meta.light_depth_range = frame->depth_range();
-  meta.resolution = resolution;
-  meta.tile_size = layout->tile_size();
+  meta.scene_bounds = build.scene.bounds;
+  meta.light_direction = build.frame.direction();
+  meta.light_origin = build.frame.origin();
+  meta.light_extent = build.frame.extent();
+  meta.light_depth_range = build.frame.depth_range();
+  meta.resolution = build.layout.resolution();
+  meta.tile_size = build.layout.tile_size();
   meta.methods = config.methods;
-  meta.default_bias = config.bias_texels * frame->texel_size();
-  meta.exit_margin = config.exit_margin_texels * frame->texel_size();
+  meta.default_bias = config.bias_texels * build.frame.texel_size();
+  meta.exit_margin = config.exit_margin_texels * build.frame.texel_size();
   meta.receivers = config.receivers;
   meta.exit_caps = config.cap_exits_at_receiver_surfaces && !config.open_exit_at_far_plane;
+  return meta;
+}
 
-  // Index: which tiles have triangles; which are done already.
-  auto index_start = Clock::now();
-  LightSpaceScene light_scene(*scene, *frame, *layout);
+// Phase 3, index: which tiles have triangles (in this shard's share), which are committed already.
+struct TileIndex {
   std::map<TileCoord, DepthInterval> done;  // committed tiles and their root intervals
+  std::vector<TileCoord> todo;
+  uint64_t candidates = 0;
+  double seconds = 0;
+};
+
+Result<TileIndex> index_tiles(const BuildConfig& config, const LightSpaceScene& light_scene,
+                              const TileLayout& layout, store::Store& db, StoreMeta& meta) {
+  auto start = Clock::now();
+  TileIndex index;
   Status bad_progress;  // a corrupt record is an error, never a guess at what was done
   if (Status s = db.for_each(store::Database::progress, {},
                              [&](std::span<const uint8_t> key, std::span<const uint8_t> value) {
@@ -279,18 +281,16 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
                                  bad_progress = tile ? record.error() : tile.error();
                                  return false;
                                }
-                               done[TileCoord{tile->x, tile->y}] = {record->root_lower, record->root_upper};
+                               index.done[TileCoord{tile->x, tile->y}] = {record->root_lower, record->root_upper};
                                return true;
                              });
       !s)
     return s.error();
   if (!bad_progress) return bad_progress.error();
-  std::vector<TileCoord> todo;
-  uint64_t candidates = 0;
-  std::vector<TileWork> work = candidate_work(light_scene, *layout);
-  uint64_t share_begin = 0, share_end = layout->tile_count();
+  std::vector<TileWork> work = candidate_work(light_scene, layout);
+  uint64_t share_begin = 0, share_end = layout.tile_count();
   if (config.shard) {
-    auto plan = plan_shards(work, layout->tile_count(), config.shard->count);
+    auto plan = plan_shards(work, layout.tile_count(), config.shard->count);
     const ShardRange& mine = plan[config.shard->index];
     share_begin = mine.morton_begin;
     share_end = mine.morton_end;
@@ -304,208 +304,100 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   for (const TileWork& w : work) {
     if (w.morton_index < share_begin || w.morton_index >= share_end) continue;
     TileCoord tile = TileLayout::from_morton_index(w.morton_index);
-    ++candidates;
-    if (!done.count(tile)) todo_work.push_back(&w);
+    ++index.candidates;
+    if (!index.done.count(tile)) todo_work.push_back(&w);
   }
   // Largest estimated work first, so the last tiles are small ones and no worker idles while another
   // finishes a big tile (the tiles' blobs do not depend on the order they are built in).
   std::stable_sort(todo_work.begin(), todo_work.end(),
                    [](const TileWork* a, const TileWork* b) { return a->work() > b->work(); });
-  for (const TileWork* w : todo_work) todo.push_back(TileLayout::from_morton_index(w->morton_index));
-  double index_seconds = seconds_since(index_start);
+  for (const TileWork* w : todo_work) index.todo.push_back(TileLayout::from_morton_index(w->morton_index));
+  index.seconds = seconds_since(start);
   spdlog::info("{} of {} tiles have triangles ({} triangle references); {} already committed, {} to render",
-               candidates, layout->tile_count(), light_scene.triangle_references(), candidates - todo.size(),
-               todo.size());
+               index.candidates, layout.tile_count(), light_scene.triangle_references(),
+               index.candidates - index.todo.size(), index.todo.size());
+  return index;
+}
 
-  if (!existing->has_value() || !todo.empty() || !done.empty()) {
-    std::string text = meta.to_json().dump();
-    std::vector<store::Store::Put> puts{{store::Database::meta, bytes_of(kMetaBuildKey), bytes_of(text)}};
-    if (Status s = db.write(puts); !s) return s.error();
-  }
+Status write_meta(store::Store& db, const StoreMeta& meta) {
+  std::string text = meta.to_json().dump();
+  std::vector<store::Store::Put> puts{{store::Database::meta, bytes_of(kMetaBuildKey), bytes_of(text)}};
+  return db.write(puts);
+}
 
-  auto device = EmbreeDevice::create();
-  if (!device) return device.error();
-  DualDepthOptions depth_options;
-  depth_options.exit_margin = float(frame->depth_from_world(meta.exit_margin));
-  depth_options.open_exit_at_far_plane = config.open_exit_at_far_plane;
-  depth_options.cap_exits_at_receiver_surfaces = config.cap_exits_at_receiver_surfaces;
-  depth_options.receivers = config.receivers;
-  depth_options.coplanar_epsilon =
-      float(second_layer::coplanar_epsilon(frame->depth_from_world(meta.default_bias)));
-  DualDepthRenderer renderer(*device, light_scene, depth_options);
-  TileEncodeOptions encode_options;
-  encode_options.construction = config.construction;
-  encode_options.map_resolution = layout->resolution();
+DualDepthOptions depth_options_for(const BuildConfig& config, const LightFrame& frame, const StoreMeta& meta) {
+  DualDepthOptions options;
+  options.exit_margin = float(frame.depth_from_world(meta.exit_margin));
+  options.open_exit_at_far_plane = config.open_exit_at_far_plane;
+  options.cap_exits_at_receiver_surfaces = config.cap_exits_at_receiver_surfaces;
+  options.receivers = config.receivers;
+  options.coplanar_epsilon = float(second_layer::coplanar_epsilon(frame.depth_from_world(meta.default_bias)));
+  return options;
+}
 
-  // Workers: render, encode, commit, one tile at a time each.
-  auto render_start = Clock::now();
-  std::atomic<size_t> next{0};
-  std::atomic<uint64_t> committed{0};
-  std::atomic<uint64_t> rays_done{0};
-  std::atomic<bool> failed{false};
-  std::mutex totals_mutex;
-  WorkerTotals totals;
-  std::map<TileCoord, DepthInterval> roots = done;  // guarded by totals_mutex
-  std::optional<Error> first_error;
-  auto fail = [&](Error error) {
-    std::lock_guard lock(totals_mutex);
-    if (!first_error) first_error = std::move(error);
-    failed = true;
-  };
-  auto worker = [&] {
-    WorkerTotals mine;
-    while (!failed) {
-      size_t i = next++;
-      if (i >= todo.size()) break;
-      TileCoord tile = todo[i];
-      DualDepthStats depth;
-      auto intervals = renderer.render(tile, &depth);
-      if (!intervals) { fail(intervals.error()); break; }
-      mine.depth.add(depth);
-      rays_done += depth.rays;
-
-      auto encode_start = Clock::now();
-      std::vector<store::Store::Put> puts;
-      bool empty = intervals->all_missed();
-      DepthInterval root;  // an empty tile's root is a miss: lit
-      if (!empty) {
-        auto encoding = encode_tile(config.methods, *intervals, encode_options);
-        if (!encoding) { fail(encoding.error()); break; }
-        if (encoding->has_root) root = encoding->root;
-        for (EncodedPayload& encoded : encoding->payloads) {
-          auto blob_start = Clock::now();
-          auto blob = store::encode_blob(encoded.method, encoded.payload, 0, config.zstd_level);
-          const char* name = store::method_name(encoded.method);
-          mine.encode_seconds_by_method[name] += encoded.seconds + seconds_since(blob_start);
-          mine.blob_bytes += blob.size();
-          mine.bytes_by_method[name] += blob.size();
-          mine.raw_bytes_by_method[name] += encoded.payload.size();
-          mine.reference_bytes_by_method[name] += encoded.reference_bytes;
-          auto key = store::encode_tile_key({encoded.method, layout->tile_level(), tile.x, tile.y});
-          // The tile's info record goes with its blob (same transaction, same key).
-          store::TileInfo info{encoding->has_root, root.lower, root.upper, blob.size(), encoded.payload.size()};
-          auto info_bytes = store::encode_tile_info(info);
-          puts.push_back({store::Database::tileinfo, {key.begin(), key.end()}, {info_bytes.begin(), info_bytes.end()}});
-          puts.push_back({store::Database::tiles, {key.begin(), key.end()}, std::move(blob)});
-          // The inspector's preview of this tile, committed with it (store/tile_preview.hpp).
-          auto preview_start = Clock::now();
-          auto preview = make_tile_preview(*intervals, encoded.method, encoded.payload);
-          if (!preview) { fail(preview.error()); break; }
-          auto preview_blob = store::encode_preview(encoded.method, *preview, config.zstd_level);
-          mine.preview_seconds += seconds_since(preview_start);
-          mine.preview_bytes += preview_blob.size();
-          puts.push_back({store::Database::preview, {key.begin(), key.end()}, std::move(preview_blob)});
-        }
-        if (failed) break;
-        ++mine.stored_tiles;
-      }
-      {
-        const auto key = store::progress_key(tile.x, tile.y);
-        const auto record = store::encode_progress({!empty, root.lower, root.upper});
-        puts.push_back({store::Database::progress, {key.begin(), key.end()}, {record.begin(), record.end()}});
-      }
-      mine.encode_seconds += seconds_since(encode_start);
-
-      auto store_start = Clock::now();
-      if (Status s = db.write(puts); !s) { fail(s.error()); break; }
-      mine.store_seconds += seconds_since(store_start);
-      {
-        std::lock_guard lock(totals_mutex);
-        roots[tile] = root;
-      }
-      uint64_t count = ++committed;
-      if (config.debug_kill_after_tiles && count >= config.debug_kill_after_tiles) std::raise(SIGKILL);
-    }
-    std::lock_guard lock(totals_mutex);
-    totals.depth.add(mine.depth);
-    totals.encode_seconds += mine.encode_seconds;
-    totals.store_seconds += mine.store_seconds;
-    totals.stored_tiles += mine.stored_tiles;
-    totals.blob_bytes += mine.blob_bytes;
-    totals.preview_bytes += mine.preview_bytes;
-    totals.preview_seconds += mine.preview_seconds;
-    for (auto& [k, v] : mine.bytes_by_method) totals.bytes_by_method[k] += v;
-    for (auto& [k, v] : mine.raw_bytes_by_method) totals.raw_bytes_by_method[k] += v;
-    for (auto& [k, v] : mine.reference_bytes_by_method) totals.reference_bytes_by_method[k] += v;
-    for (auto& [k, v] : mine.encode_seconds_by_method) totals.encode_seconds_by_method[k] += v;
-  };
-  std::vector<std::thread> threads;
-  unsigned thread_count = std::min<unsigned>(config.threads, std::max<size_t>(todo.size(), 1));
-  for (unsigned t = 0; t < thread_count; ++t) threads.emplace_back(worker);
-
-  // Progress line about once a second while the workers run.
-  auto last_report = Clock::now();
-  while (committed < todo.size() && !failed) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    if (config.on_progress && seconds_since(last_report) >= 1.0) {
-      last_report = Clock::now();
-      double elapsed = seconds_since(render_start);
-      uint64_t n = committed;
-      double rate = elapsed > 0 ? double(rays_done) / elapsed : 0;
-      double eta = n ? elapsed / double(n) * double(todo.size() - n) : 0;
-      char line[160];
-      std::snprintf(line, sizeof line, "tiles %llu/%zu  %.2f Mrays/s  ETA %.0f s",
-                    static_cast<unsigned long long>(n), todo.size(), rate / 1e6, eta);
-      config.on_progress(line);
-    }
-  }
-  for (auto& t : threads) t.join();
-  if (first_error) return *first_error;
-  double render_wall = seconds_since(render_start);
-
-  // Top levels: the tiles' root intervals form a coarse map, itself compressed as an MH per
-  // hierarchical method, with the skip list embedded (served as /v1/skiplist).
-  auto top_start = Clock::now();
+// Phase 5, top levels: the tiles' root intervals form a coarse map, itself compressed as an MH per
+// hierarchical method, with the skip list embedded (served as /v1/skiplist). A shard holds only some
+// roots, so the merge builds its top levels instead. Returns the top blobs' bytes per method.
+Result<nlohmann::json> write_top_levels(const BuildConfig& config, const TileLayout& layout,
+                                        const std::map<TileCoord, DepthInterval>& roots, store::Store& db) {
   nlohmann::json top_bytes = nlohmann::json::object();
-  if (!config.shard) {  // a shard holds only some roots: the merge builds the top levels
-    std::vector<DepthInterval> grid(size_t(layout->tiles_per_side()) * layout->tiles_per_side());
-    for (const auto& [tile, root] : roots) grid[size_t(tile.y) * layout->tiles_per_side() + tile.x] = root;
-    auto tops = encode_top_levels(config.methods, layout->tiles_per_side(), std::move(grid), layout->tile_level(),
-                                  config.zstd_level);
-    if (!tops) return tops.error();
-    std::vector<store::Store::Put> puts;
-    for (TopLevelBlob& top : *tops) {
-      top_bytes[store::method_name(top.method)] = top.blob.size();
-      puts.push_back({store::Database::top, bytes_of(top_tree_key(top.method)), std::move(top.blob)});
-    }
-    if (!puts.empty())
-      if (Status s = db.write(puts); !s) return s.error();
+  if (config.shard) return top_bytes;
+  std::vector<DepthInterval> grid(size_t(layout.tiles_per_side()) * layout.tiles_per_side());
+  for (const auto& [tile, root] : roots) grid[size_t(tile.y) * layout.tiles_per_side() + tile.x] = root;
+  auto tops = encode_top_levels(config.methods, layout.tiles_per_side(), std::move(grid), layout.tile_level(),
+                                config.zstd_level);
+  if (!tops) return tops.error();
+  std::vector<store::Store::Put> puts;
+  for (TopLevelBlob& top : *tops) {
+    top_bytes[store::method_name(top.method)] = top.blob.size();
+    puts.push_back({store::Database::top, bytes_of(top_tree_key(top.method)), std::move(top.blob)});
   }
-  double top_seconds = seconds_since(top_start);
+  if (!puts.empty())
+    if (Status s = db.write(puts); !s) return s.error();
+  return top_bytes;
+}
 
+// The build's figures (BuildSummary::stats, also kept in the meta).
+struct PhaseTimes {
+  double index = 0, render_wall = 0, top_levels = 0;
+};
+
+BuildSummary summarize(const PreparedBuild& build, const TileIndex& index, const TilePipelineResult& tiles,
+                       const nlohmann::json& top_bytes, const PhaseTimes& times, Clock::time_point total_start) {
+  const TilePipelineTotals& totals = tiles.totals;
   // Ray casting wall: the dual-depth casting alone (BVH + rays, not the cap pass, encoders or store)
   // spread over the worker threads, i.e. what the build would take if it only cast rays.
   const double ray_casting_wall =
-      thread_count ? (totals.depth.bvh_seconds + totals.depth.ray_seconds) / double(thread_count) : 0.0;
-  // Finish: meta marked complete with the stats, then one forced sync.
+      tiles.threads ? (totals.depth.bvh_seconds + totals.depth.ray_seconds) / double(tiles.threads) : 0.0;
   BuildSummary summary;
-  summary.tiles_total = layout->tile_count();
-  summary.tiles_candidate = candidates;
-  summary.tiles_rendered = todo.size();
-  summary.tiles_resumed = candidates - todo.size();
+  summary.tiles_total = build.layout.tile_count();
+  summary.tiles_candidate = index.candidates;
+  summary.tiles_rendered = index.todo.size();
+  summary.tiles_resumed = index.candidates - index.todo.size();
   summary.tiles_stored = totals.stored_tiles;
   summary.rays = totals.depth.rays;
   summary.blob_bytes = totals.blob_bytes;
   nlohmann::json bytes = totals.bytes_by_method, raw_bytes = totals.raw_bytes_by_method;
   summary.stats = {
-      {"tiles", {{"total", summary.tiles_total}, {"with_triangles", candidates}, {"rendered", summary.tiles_rendered},
-                 {"resumed", summary.tiles_resumed}, {"stored", summary.tiles_stored}}},
-      {"scene", {{"triangles", scene->triangle_count()}, {"dropped", load_stats.dropped_triangles},
-                 {"meshes", load_stats.meshes}, {"closed_meshes", load_stats.closed_meshes}}},
+      {"tiles", {{"total", summary.tiles_total}, {"with_triangles", index.candidates},
+                 {"rendered", summary.tiles_rendered}, {"resumed", summary.tiles_resumed},
+                 {"stored", summary.tiles_stored}}},
+      {"scene", {{"triangles", build.scene.triangle_count()}, {"dropped", build.load_stats.dropped_triangles},
+                 {"meshes", build.load_stats.meshes}, {"closed_meshes", build.load_stats.closed_meshes}}},
       {"rays", summary.rays},
       {"hit_texels", totals.depth.hits},   // texels some geometry covers (this run's tiles)
       {"exit_texels", totals.depth.exits}, // texels with a real exit (upper > lower)
-      {"rays_per_second", render_wall > 0 ? double(summary.rays) / render_wall : 0.0},
+      {"rays_per_second", times.render_wall > 0 ? double(summary.rays) / times.render_wall : 0.0},
       // Ray casting alone (BVH build excluded), per worker thread.
       {"rays_per_thread_second",
        totals.depth.ray_seconds > 0 ? double(summary.rays) / totals.depth.ray_seconds : 0.0},
-      {"threads", thread_count},
-      {"seconds", {{"load", load_stats.seconds}, {"index", index_seconds},
+      {"threads", tiles.threads},
+      {"seconds", {{"load", build.load_stats.seconds}, {"index", times.index},
                    {"bvh_thread_sum", totals.depth.bvh_seconds}, {"rays_thread_sum", totals.depth.ray_seconds},
                    {"caps_thread_sum", totals.depth.cap_seconds}, {"ray_casting_wall", ray_casting_wall},
                    {"encode_thread_sum", totals.encode_seconds},
                    {"preview_thread_sum", totals.preview_seconds}, {"store_thread_sum", totals.store_seconds},
-                   {"render_wall", render_wall}, {"top_levels", top_seconds},
+                   {"render_wall", times.render_wall}, {"top_levels", times.top_levels},
                    {"total", seconds_since(total_start)}}},
       {"bytes_by_method", bytes},
       {"top_bytes_by_method", top_bytes},
@@ -515,6 +407,12 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
       {"payload_bytes_by_method", raw_bytes},
       {"peak_memory_mib", peak_memory_mib()},
   };
+  return summary;
+}
+
+// Phase 6, finish: the meta marked complete (a shard: its share complete) with the stats, then one
+// forced sync; the build-time ratio of issue 14.
+Status finish(store::Store& db, StoreMeta& meta, BuildSummary& summary, Clock::time_point total_start) {
   if (meta.shard) {
     meta.shard->complete = true;  // the share is done; the whole build is complete once merged
     summary.stats["shard"] = {{"index", meta.shard->index}, {"count", meta.shard->count},
@@ -524,14 +422,70 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
     meta.complete = true;
   }
   meta.build_stats = summary.stats;
-  std::string text = meta.to_json().dump();
-  std::vector<store::Store::Put> puts{{store::Database::meta, bytes_of(kMetaBuildKey), bytes_of(text)}};
-  if (Status s = db.write(puts); !s) return s.error();
-  if (Status s = db.sync(); !s) return s.error();
+  if (Status s = write_meta(db, meta); !s) return s;
+  if (Status s = db.sync(); !s) return s;
   summary.stats["seconds"]["total"] = seconds_since(total_start);
   // Build wall over ray-casting wall (issue 14's build-time figure); with the meta's own total.
+  const double ray_casting_wall = summary.stats["seconds"]["ray_casting_wall"].get<double>();
   if (ray_casting_wall > 0)
     summary.stats["wall_over_ray_casting"] = summary.stats["seconds"]["total"].get<double>() / ray_casting_wall;
+  return {};
+}
+
+}  // namespace
+
+Result<BuildSummary> run_build(const BuildConfig& config) {
+  const auto total_start = Clock::now();
+  if (Status status = validate(config); !status) return status.error();
+  if (config.shard && config.plan_shards_only)
+    return make_error(ErrorCode::invalid_input, "give --shard or --plan-shards, not both");
+
+  // 1. Prepare: scene, light frame, tile layout, the build's identity.
+  auto build = prepare(config);
+  if (!build) return build.error();
+  if (config.plan_shards_only) return plan_only(config, *build);
+
+  // 2. Open or resume the store.
+  auto opened = open_or_resume(config, build->config_hash);
+  if (!opened) return opened.error();
+  store::Store& db = *opened->db;
+  StoreMeta meta = initial_meta(config, *build);
+
+  // 3. Index: tiles with triangles in this share, minus those committed already.
+  LightSpaceScene light_scene(build->scene, build->frame, build->layout);
+  auto index = index_tiles(config, light_scene, build->layout, db, meta);
+  if (!index) return index.error();
+  if (!opened->had_meta || !index->todo.empty() || !index->done.empty())
+    if (Status s = write_meta(db, meta); !s) return s.error();
+
+  // 4. Render + encode + commit every tile to do (builder/tile_pipeline.hpp).
+  auto device = EmbreeDevice::create();
+  if (!device) return device.error();
+  DualDepthRenderer renderer(*device, light_scene, depth_options_for(config, build->frame, meta));
+  TilePipelineInput pipeline;
+  pipeline.methods = &config.methods;
+  pipeline.layout = &build->layout;
+  pipeline.renderer = &renderer;
+  pipeline.encode_options.construction = config.construction;
+  pipeline.encode_options.map_resolution = build->layout.resolution();
+  pipeline.zstd_level = config.zstd_level;
+  pipeline.threads = config.threads;
+  pipeline.debug_kill_after_tiles = config.debug_kill_after_tiles;
+  pipeline.on_progress = config.on_progress;
+  auto tiles = run_tile_pipeline(pipeline, index->todo, db);
+  if (!tiles) return tiles.error();
+
+  // 5. Top levels from every tile's root, resumed ones included.
+  auto top_start = Clock::now();
+  std::map<TileCoord, DepthInterval> roots = index->done;
+  for (const auto& [tile, root] : tiles->roots) roots[tile] = root;
+  auto top_bytes = write_top_levels(config, build->layout, roots, db);
+  if (!top_bytes) return top_bytes.error();
+  const PhaseTimes times{index->seconds, tiles->wall_seconds, seconds_since(top_start)};
+
+  // 6. Finish: stats, meta marked complete, one sync.
+  BuildSummary summary = summarize(*build, *index, *tiles, *top_bytes, times, total_start);
+  if (Status s = finish(db, meta, summary, total_start); !s) return s.error();
   return summary;
 }
 

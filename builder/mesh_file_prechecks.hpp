@@ -13,9 +13,12 @@
 //   ascii: one instance per line, as assimp reads them), and every list's item count must fit in
 //   what is left (binary: of the file, ascii: of its line). assimp resizes a list to its count before
 //   reading it, so a 4-byte count of 4e9 is a 32 GB allocation from a 200-byte file.
-//   Binary files shorter than their header declares are refused as truncated.
+//   Bodies shorter than their header declares are refused as truncated (binary: by bytes; ascii: by
+//   non-blank lines, since assimp 5.2 reads on past the end of a short ascii body).
 // OFF (check_off_file): the vertex and face counts must fit in the file (a vertex takes at least
-// "0 0 0\n", a face "0\n"); anything else is left to assimp's own errors.
+// "0 0 0\n", a face "0\n"); every face line starts with its vertex count, lists that many indices,
+// and each index names a vertex (assimp 5.2 reads them unchecked: out-of-bounds reads, a crash).
+// Other oddities (short files, bad numbers in vertex lines) are left to assimp's own errors.
 //
 // Cost: one sequential read of the file (binary lists are walked per instance; elements without
 // lists are skipped in one step), small next to assimp's own parse.

@@ -114,6 +114,21 @@ TEST(MeshFilePrechecks, TruncatedBinaryBodyIsRefused) {
   expect_refused(dir.path() / "short.ply", "the body ends inside element 'vertex'");
 }
 
+TEST(MeshFilePrechecks, ShortAsciiBodyIsRefused) {
+  // fuzz_scene_loader regression (ply-ascii-body-shorter-than-declared): 81 vertices and 128 faces
+  // declared, 113 lines given; assimp 5.2 read on past the end and took 21 GB before the kernel killed it.
+  TempDir dir;
+  write_file(dir.path() / "short.ply", kAsciiHeader + kAsciiVertices);  // the face line is missing
+  expect_refused(dir.path() / "short.ply", "truncated");
+  std::string padded = kAsciiHeader + kAsciiVertices;
+  padded.replace(padded.find("element face 1"), 14, "element face 2");
+  write_file(dir.path() / "padded.ply", padded + "3 0 1 2\n" + std::string(64, ' '));  // passes the size rule
+  expect_refused(dir.path() / "padded.ply", "the body ends at element 'face' #1 of 2 (truncated file)");
+  // Blank lines are skipped, as assimp does.
+  write_file(dir.path() / "blank.ply", kAsciiHeader + "0 0 0\n\n1 0 0\n0 1 0\n\n3 0 1 2\n");
+  EXPECT_EQ(load_ok(dir.path() / "blank.ply").triangle_count(), 1u);
+}
+
 TEST(MeshFilePrechecks, HeaderTypesAndFormatMustBePly) {
   TempDir dir;
   std::string bad_type = kAsciiHeader;
@@ -128,6 +143,30 @@ TEST(MeshFilePrechecks, HeaderTypesAndFormatMustBePly) {
   float_count.replace(float_count.find("list uchar"), 10, "list float");
   write_file(dir.path() / "float_count.ply", float_count + kAsciiVertices + "3 0 1 2\n");
   expect_refused(dir.path() / "float_count.ply", "not an integer type");
+}
+
+TEST(MeshFilePrechecks, OffFacesMustNameTheirVertices) {
+  // fuzz_scene_loader regression (off-face-count-beyond-its-line): assimp 5.2 reads a face's indices
+  // without checking them; a face line "90.000 240.000 373.413" (a vertex line where a face was
+  // expected) made it read far out of bounds and crash.
+  TempDir dir;
+  const std::string header = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n";
+  write_file(dir.path() / "range.off", header + "3 0 1 5\n");
+  expect_refused(dir.path() / "range.off", "face #0: vertex index 5 is out of range (the file has 3 vertices)");
+  write_file(dir.path() / "short.off", header + "90 1 2\n");
+  expect_refused(dir.path() / "short.off", "face #0 declares 90 vertices and lists 2");
+  write_file(dir.path() / "float.off", header + "90.000 240.000 373.413\n");
+  expect_refused(dir.path() / "float.off", "face #0 does not start with its vertex count ('90.000')");
+  write_file(dir.path() / "word.off", header + "3 0 x 2\n");
+  expect_refused(dir.path() / "word.off", "face #0: 'x' is not a vertex index");
+  // Blank lines are skipped (as assimp does); colour values after the indices are allowed.
+  write_file(dir.path() / "ok.off", "OFF 3 1 0\n0 0 0\n\n1 0 0\n0 1 0\n3 0 1 2 255 0 0\n");
+  EXPECT_EQ(load_ok(dir.path() / "ok.off").triangle_count(), 1u);
+  for (const char* model : {"OFF/Cube.off", "OFF/Wuson.off"}) {
+    const auto path = assimp_model(model);
+    auto status = check_off_file(path, std::filesystem::file_size(path));
+    EXPECT_TRUE(status.ok()) << model << ": " << (status.ok() ? "" : status.error().message);
+  }
 }
 
 TEST(MeshFilePrechecks, EveryRealPlyPasses) {
