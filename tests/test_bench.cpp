@@ -29,14 +29,10 @@ using st::testing::TempDir;
 
 namespace {
 
+using shadowtiles::testing::read_file;
+
 const char* kLossless[] = {"mh", "mmh", "dagmh"};
 
-std::string read_file(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 struct BenchOutput {
   nlohmann::json doc;

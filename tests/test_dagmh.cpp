@@ -15,6 +15,7 @@
 #include "builder/mh_synthetic.hpp"
 #include "builder/mmh_merger.hpp"
 #include "codec/dagmh_decoder.hpp"
+#include "tests/mh_reference_intervals.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -52,33 +53,7 @@ uint64_t violations(const TileIntervals& tile, const DagMhTileView& view) {
   return bad;
 }
 
-// Reference bottom-up node intervals per level (docs/architecture.md §5), independent of the builder.
-std::vector<std::vector<DepthInterval>> reference_intervals(const TileIntervals& tile) {
-  unsigned L = 0;
-  while ((1u << L) < tile.size) ++L;
-  std::vector<std::vector<DepthInterval>> levels(L + 1);
-  levels[L] = tile.texels;
-  for (unsigned l = L; l-- > 0;) {
-    const uint32_t side = 1u << l;
-    levels[l].resize(size_t(side) * side);
-    for (uint32_t y = 0; y < side; ++y)
-      for (uint32_t x = 0; x < side; ++x) {
-        DepthInterval c[4];
-        for (unsigned i = 0; i < 4; ++i) c[i] = levels[l + 1][size_t(2 * y + i / 2) * 2 * side + 2 * x + i % 2];
-        int best = -1, best_count = -1;
-        for (int i = 0; i < 4; ++i) {
-          int count = 0;
-          for (int j = 0; j < 4; ++j) count += c[j].contains(c[i].lower);
-          if (count > best_count) best = i, best_count = count;
-        }
-        DepthInterval r{-kInf, kInf};
-        for (int i = 0; i < 4; ++i)
-          if (c[i].contains(c[best].lower)) r.lower = std::max(r.lower, c[i].lower), r.upper = std::min(r.upper, c[i].upper);
-        levels[l][size_t(y) * side + x] = r;
-      }
-  }
-  return levels;
-}
+using testing::reference_intervals;
 
 using Param = std::tuple<MhSyntheticKind, uint32_t>;
 class DagMhLossless : public ::testing::TestWithParam<Param> {};

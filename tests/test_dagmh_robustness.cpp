@@ -9,13 +9,13 @@
 
 #include <cmath>
 #include <cstring>
-#include <random>
 
 #include "builder/dagmh_encoder.hpp"
 #include "builder/mh_builder.hpp"
 #include "builder/mh_synthetic.hpp"
 #include "codec/dagmh_decoder.hpp"
 #include "codec/dagmh_format.hpp"
+#include "tests/payload_attacks.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -68,77 +68,34 @@ bool try_parse(const std::vector<uint8_t>& bytes) {
   return accepted;
 }
 
-
 TEST(DagMhRobustness, EveryTruncationIsAnError) {
   for (const auto& p : sample_payloads())
     for (size_t len = 0; len < p.size(); ++len)
       EXPECT_FALSE(try_parse(std::vector<uint8_t>(p.begin(), p.begin() + len))) << "length " << len;
 }
 
-
 TEST(DagMhRobustness, EverySingleBitFlipIsSafe) {
-  uint64_t accepted = 0, trials = 0;
-  for (const auto& p : sample_payloads())
-    for (size_t byte = 0; byte < p.size(); ++byte)
-      for (unsigned bit = 0; bit < 8; ++bit) {
-        auto q = p;
-        q[byte] ^= uint8_t(1u << bit);
-        accepted += try_parse(q);
-        ++trials;
-      }
   // Value bits (representatives, raw floats, multipliers) are legitimately accepted.
-  EXPECT_LT(accepted, trials);
-  RecordProperty("accepted", std::to_string(accepted) + "/" + std::to_string(trials));
+  testing::expect_every_bit_flip_safe(sample_payloads(), try_parse);
 }
 
 TEST(DagMhRobustness, RandomMultiByteCorruptionIsSafe) {
-  std::mt19937 rng(5);
-  const auto payloads = sample_payloads();
-  for (int trial = 0; trial < 20000; ++trial) {
-    auto q = payloads[rng() % payloads.size()];
-    const unsigned edits = 1 + rng() % 4;
-    for (unsigned e = 0; e < edits; ++e) q[rng() % q.size()] = uint8_t(rng());
-    try_parse(q);
-  }
+  testing::random_multi_byte_corruption(sample_payloads(), try_parse, 20000, 5);
 }
 
 TEST(DagMhRobustness, HostileHeaderFields) {
-  for (const auto& p : sample_payloads()) {
-    for (size_t field : {F::kOffSize, F::kOffRootRef, F::kOffDagBytes, F::kOffTreeletCount, F::kOffValueCount,
-                         F::kOffChunkBytes}) {
-      for (uint32_t value : {0u, 1u, 0x7fffffffu, 0xffffffffu, uint32_t(p.size())}) {
-        auto q = p;
-        std::memcpy(q.data() + field, &value, 4);
-        try_parse(q);
-      }
-    }
-    for (size_t field : {F::kOffLevels, F::kOffTreeletHeight, F::kOffRefWidth, F::kOffCountWidth,
-                         F::kOffChunkOffsetWidth, F::kOffRootKind, F::kOffChunkSize, F::kOffChunkSize + 1})
-      for (unsigned value = 0; value < 256; value += 3) {
-        auto q = p;
-        q[field] = uint8_t(value);
-        try_parse(q);
-      }
-  }
+  testing::hostile_header_fields(sample_payloads(),
+                                 {F::kOffSize, F::kOffRootRef, F::kOffDagBytes, F::kOffTreeletCount, F::kOffValueCount,
+                                  F::kOffChunkBytes},
+                                 {F::kOffLevels, F::kOffTreeletHeight, F::kOffRefWidth, F::kOffCountWidth,
+                                  F::kOffChunkOffsetWidth, F::kOffRootKind, F::kOffChunkSize, F::kOffChunkSize + 1},
+                                 try_parse);
 }
 
 TEST(DagMhRobustness, MagicAndVersion) {
-  auto p = sample_payloads()[3];
-  auto q = p;
-  q[0] = 'X';
-  auto r = DagMhTileView::parse(q);
-  ASSERT_FALSE(r.ok());
-  EXPECT_EQ(r.error().code, ErrorCode::corrupt_data);
-  q = p;
-  q[F::kOffVersion] = uint8_t(F::kFormatVersion + 1);
-  r = DagMhTileView::parse(q);
-  ASSERT_FALSE(r.ok());
-  EXPECT_EQ(r.error().code, ErrorCode::unsupported);
-  q = p;
-  q[F::kOffVersion] = 0;
-  EXPECT_FALSE(DagMhTileView::parse(q).ok());
+  testing::expect_magic_and_version_checked(sample_payloads()[3], F::kOffVersion, F::kFormatVersion,
+                                            [](const std::vector<uint8_t>& q) { return DagMhTileView::parse(q); });
 }
-
 
 }  // namespace
 }  // namespace shadowtiles

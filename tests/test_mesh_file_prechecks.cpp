@@ -21,11 +21,8 @@ namespace {
 using testing::assimp_model;
 using testing::shared_scene;
 using testing::TempDir;
+using testing::write_file;
 
-void write_file(const std::filesystem::path& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out << bytes;
-}
 
 Scene load_ok(const std::filesystem::path& file) {
   auto scene = load_scene(file, {});

@@ -8,7 +8,6 @@
 
 #include <cmath>
 #include <cstring>
-#include <random>
 
 #include "builder/mh_builder.hpp"
 #include "builder/mh_encoder.hpp"
@@ -16,6 +15,7 @@
 #include "builder/mmh_merger.hpp"
 #include "codec/mh_decoder.hpp"
 #include "codec/mh_format.hpp"
+#include "tests/payload_attacks.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -62,74 +62,28 @@ bool try_parse(const std::vector<uint8_t>& bytes) {
   return true;
 }
 
-
-
-
 TEST(MhRobustness, EverySingleBitFlipIsSafe) {
-  uint64_t accepted = 0, trials = 0;
-  for (const auto& p : sample_payloads()) {
-    for (size_t byte = 0; byte < p.size(); ++byte)
-      for (unsigned bit = 0; bit < 8; ++bit) {
-        auto q = p;
-        q[byte] ^= uint8_t(1u << bit);
-        accepted += try_parse(q);
-        ++trials;
-      }
-  }
   // Flipped value bits are legitimately accepted (a different finite value); structure flips are not.
-  EXPECT_LT(accepted, trials);
-  RecordProperty("accepted", std::to_string(accepted) + "/" + std::to_string(trials));
+  testing::expect_every_bit_flip_safe(sample_payloads(), try_parse);
 }
 
 TEST(MhRobustness, RandomMultiByteCorruptionIsSafe) {
-  std::mt19937 rng(5);
-  const auto payloads = sample_payloads();
-  for (int trial = 0; trial < 20000; ++trial) {
-    auto q = payloads[rng() % payloads.size()];
-    const unsigned edits = 1 + rng() % 4;
-    for (unsigned e = 0; e < edits; ++e) q[rng() % q.size()] = uint8_t(rng());
-    try_parse(q);
-  }
+  testing::random_multi_byte_corruption(sample_payloads(), try_parse, 20000, 5);
 }
 
 // Header fields set to extreme values (offsets, counts, sizes) with the payload size kept.
 TEST(MhRobustness, HostileHeaderFields) {
   namespace F = mh_format;
-  for (const auto& p : sample_payloads()) {
-    for (size_t field : {F::kOffSize, F::kOffRootBlock, F::kOffStreamBytes, F::kOffBlockCount, F::kOffRecordCount,
-                         F::kOffValueCount}) {
-      for (uint32_t value : {0u, 1u, 0x7fffffffu, 0xffffffffu, uint32_t(p.size())}) {
-        auto q = p;
-        std::memcpy(q.data() + field, &value, 4);
-        try_parse(q);
-      }
-    }
-    for (size_t field : {F::kOffLevels, F::kOffOffsetWidth, F::kOffSkipLevel, F::kOffRootMask})
-      for (unsigned value = 0; value < 256; value += 3) {
-        auto q = p;
-        q[field] = uint8_t(value);
-        try_parse(q);
-      }
-  }
+  testing::hostile_header_fields(sample_payloads(),
+                                 {F::kOffSize, F::kOffRootBlock, F::kOffStreamBytes, F::kOffBlockCount,
+                                  F::kOffRecordCount, F::kOffValueCount},
+                                 {F::kOffLevels, F::kOffOffsetWidth, F::kOffSkipLevel, F::kOffRootMask}, try_parse);
 }
 
 TEST(MhRobustness, MagicAndVersion) {
-  auto p = sample_payloads()[3];
-  auto q = p;
-  q[0] = 'X';
-  auto r = MhTileView::parse(q);
-  ASSERT_FALSE(r.ok());
-  EXPECT_EQ(r.error().code, ErrorCode::corrupt_data);
-  q = p;
-  q[mh_format::kOffVersion] = uint8_t(mh_format::kFormatVersion + 1);
-  r = MhTileView::parse(q);
-  ASSERT_FALSE(r.ok());
-  EXPECT_EQ(r.error().code, ErrorCode::unsupported);
-  q = p;
-  q[mh_format::kOffVersion] = 0;
-  EXPECT_FALSE(MhTileView::parse(q).ok());
+  testing::expect_magic_and_version_checked(sample_payloads()[3], mh_format::kOffVersion, mh_format::kFormatVersion,
+                                            [](const std::vector<uint8_t>& q) { return MhTileView::parse(q); });
 }
-
 
 }  // namespace
 }  // namespace shadowtiles

@@ -23,7 +23,9 @@ namespace {
 
 using testing::assimp_model;
 using testing::shared_scene;
+using testing::read_file;
 using testing::TempDir;
+using testing::write_file;
 
 Scene load_ok(const std::filesystem::path& file, const LoadOptions& options = {},
               LoadStats* stats = nullptr) {
@@ -33,15 +35,7 @@ Scene load_ok(const std::filesystem::path& file, const LoadOptions& options = {}
   return std::move(scene).value();
 }
 
-void write_file(const std::filesystem::path& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out << bytes;
-}
 
-std::string read_file(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
 
 WorldBounds mesh_bounds(const Scene& scene, const MeshInfo& mesh) {
   WorldBounds b{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};

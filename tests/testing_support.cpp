@@ -6,6 +6,8 @@
 #include <array>
 #include <atomic>
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <random>
 
 namespace shadowtiles::testing {
@@ -19,6 +21,16 @@ std::filesystem::path assimp_model(const std::string& relative) {
 }
 
 std::filesystem::path cli_path() { return SHADOWTILES_CLI; }
+
+void write_file(const std::filesystem::path& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
 
 TempDir::TempDir() {
   static std::atomic<int> counter{0};

@@ -24,6 +24,9 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+// Whole-file bytes, for fixtures: write (truncating) and read; a missing file reads as "".
+void write_file(const std::filesystem::path& path, const std::string& bytes);
+std::string read_file(const std::filesystem::path& path);
 // Runs a shell command, returns its exit status (as from waitpid, decoded) and captures stdout+stderr.
 int run_command(const std::string& command, std::string* output = nullptr);
 
