@@ -14,7 +14,7 @@
 #include <mutex>
 #include <thread>
 
-#include "client/morton.hpp"
+#include "codec/morton.hpp"
 #include "client/shadow_map.hpp"
 
 namespace shadowtiles {

@@ -3,30 +3,9 @@
 #include <bit>
 #include <string>
 
+#include "codec/morton.hpp"
+
 namespace shadowtiles {
-namespace {
-
-uint64_t spread_bits(uint32_t x) {
-  uint64_t v = x;
-  v = (v | (v << 16)) & 0x0000FFFF0000FFFFull;
-  v = (v | (v << 8)) & 0x00FF00FF00FF00FFull;
-  v = (v | (v << 4)) & 0x0F0F0F0F0F0F0F0Full;
-  v = (v | (v << 2)) & 0x3333333333333333ull;
-  v = (v | (v << 1)) & 0x5555555555555555ull;
-  return v;
-}
-
-uint32_t gather_bits(uint64_t v) {
-  v &= 0x5555555555555555ull;
-  v = (v | (v >> 1)) & 0x3333333333333333ull;
-  v = (v | (v >> 2)) & 0x0F0F0F0F0F0F0F0Full;
-  v = (v | (v >> 4)) & 0x00FF00FF00FF00FFull;
-  v = (v | (v >> 8)) & 0x0000FFFF0000FFFFull;
-  v = (v | (v >> 16)) & 0x00000000FFFFFFFFull;
-  return uint32_t(v);
-}
-
-}  // namespace
 
 Result<TileLayout> TileLayout::make(uint32_t resolution, uint32_t tile_size) {
   if (!std::has_single_bit(resolution))
@@ -41,8 +20,8 @@ Result<TileLayout> TileLayout::make(uint32_t resolution, uint32_t tile_size) {
   return layout;
 }
 
-uint64_t TileLayout::morton_index(TileCoord tile) { return spread_bits(tile.x) | (spread_bits(tile.y) << 1); }
+uint64_t TileLayout::morton_index(TileCoord tile) { return morton_spread(tile.x) | (morton_spread(tile.y) << 1); }
 
-TileCoord TileLayout::from_morton_index(uint64_t index) { return {gather_bits(index), gather_bits(index >> 1)}; }
+TileCoord TileLayout::from_morton_index(uint64_t index) { return {morton_compact(index), morton_compact(index >> 1)}; }
 
 }  // namespace shadowtiles

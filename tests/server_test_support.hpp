@@ -32,6 +32,8 @@
 #include "store/lmdb_store.hpp"
 #include "store/serving_lock.hpp"
 #include "store/tile_key.hpp"
+#include "tests/running_server.hpp"
+#include "tests/scene_build_config.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles::server_testing {
@@ -43,15 +45,7 @@ inline constexpr const char* kAllowedOrigin = "https://allowed.example";
 inline constexpr const char* kBunny = "bunny/stanford-bunny.obj";
 
 inline BuildConfig bunny_config(const std::filesystem::path& out, std::vector<store::Method> methods) {
-  BuildConfig config;
-  config.scene_path = testing::shared_scene(kBunny);
-  config.store_path = out;
-  config.resolution = 512;
-  config.tile_size = 128;
-  config.load.up = UpAxis::y;
-  config.light_direction = *light_direction_from_sun(135, 45, UpAxis::y);
-  config.methods = std::move(methods);
-  return config;
+  return testing::shared_scene_config({kBunny, UpAxis::y, false}, out, 512, 128, std::move(methods), 135, 45);
 }
 
 inline server::ServerConfig test_config() {
@@ -66,39 +60,7 @@ inline server::ServerConfig test_config() {
 }
 
 // A server running run() on its own thread; stopped and joined on destruction.
-class RunningServer {
- public:
-  RunningServer(const server::ServerConfig& config, const std::filesystem::path* store_dir) {
-    auto bound = server::Server::bind(config);
-    EXPECT_TRUE(bound.ok()) << bound.error().message;
-    server_ = std::move(*bound);
-    if (store_dir) {
-      Status s = server_->attach_store(*store_dir);
-      EXPECT_TRUE(s.ok()) << s.error().message;
-    }
-    thread_ = std::thread([this] { EXPECT_TRUE(server_->run().ok()); });
-    // Wait until it answers, so stop() cannot race with the listener's start.
-    httplib::Client probe("127.0.0.1", port());
-    for (int i = 0; i < 200 && !probe.Get("/healthz"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  ~RunningServer() {
-    server_->stop();
-    thread_.join();
-  }
-  int port() const { return server_->port(); }
-  server::Server& server() { return *server_; }
-  httplib::Client client() const {
-    httplib::Client c("127.0.0.1", port());
-    c.set_keep_alive(true);
-    c.set_tcp_nodelay(true);
-    c.set_read_timeout(20, 0);
-    return c;
-  }
-
- private:
-  std::unique_ptr<server::Server> server_;
-  std::thread thread_;
-};
+using testing::RunningServer;
 
 inline std::string encode_points(const std::vector<Vec3>& points) {
   std::string body(points.size() * 12, '\0');

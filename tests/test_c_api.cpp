@@ -14,6 +14,7 @@
 #include "builder/scene_loader.hpp"
 #include "capi/shadowtiles.h"
 #include "client/shadow_map.hpp"
+#include "tests/scene_build_config.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles {
@@ -23,14 +24,7 @@ class CApiTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new testing::TempDir();
-    BuildConfig config;
-    config.scene_path = testing::shared_scene("fzk_haus/fzk_haus.obj");
-    config.store_path = dir_->path() / "store";
-    config.resolution = 256;
-    config.tile_size = 64;
-    config.load.up = UpAxis::y;
-    config.light_direction = *light_direction_from_sun(120, 35, UpAxis::y);
-    config.methods = {store::Method::mh, store::Method::raw, store::Method::dagmh};
+    BuildConfig config = testing::fzk_haus_config(dir_->path() / "store", 256, {store::Method::mh, store::Method::raw, store::Method::dagmh});
     ASSERT_TRUE(run_build(config).ok());
     LoadOptions load;
     load.up = UpAxis::y;

@@ -10,6 +10,7 @@
 #include "builder/store_verifier.hpp"
 #include "client/shadow_map.hpp"
 #include "store/lmdb_store.hpp"
+#include "tests/scene_build_config.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles {
@@ -25,16 +26,8 @@ struct SceneCase {
 };
 
 BuildConfig config_for(const SceneCase& scene, const std::filesystem::path& out, uint32_t resolution, uint32_t tile) {
-  BuildConfig config;
-  config.scene_path = testing::shared_scene(scene.file);
-  config.store_path = out;
-  config.resolution = resolution;
-  config.tile_size = tile;
-  config.load.up = scene.up;
-  if (scene.heightfield) config.load.heightfield_meshes = {"*"};
-  config.light_direction = *light_direction_from_sun(135, 40, scene.up);
-  config.methods = {store::Method::raw, store::Method::mh, store::Method::mmh, store::Method::dagmh};
-  return config;
+  return testing::shared_scene_config({scene.file, scene.up, scene.heightfield}, out, resolution, tile,
+                                      {store::Method::raw, store::Method::mh, store::Method::mmh, store::Method::dagmh});
 }
 
 void expect_lossless(const SceneCase& scene, uint32_t resolution, uint32_t tile) {

@@ -18,6 +18,7 @@
 #include "builder/scene_loader.hpp"
 #include "client/streaming_client.hpp"
 #include "server/server.hpp"
+#include "tests/running_server.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles {
@@ -60,31 +61,7 @@ class RenderTest : public ::testing::Test {
 };
 TempDir* RenderTest::dir_ = nullptr;
 
-class RunningServer {
- public:
-  explicit RunningServer(const std::filesystem::path& store_dir) {
-    server::ServerConfig config;
-    config.port = 0;
-    config.keep_alive_timeout_s = 1;
-    auto bound = server::Server::bind(config);
-    EXPECT_TRUE(bound.ok()) << bound.error().message;
-    server_ = std::move(*bound);
-    Status attached = server_->attach_store(store_dir);
-    EXPECT_TRUE(attached.ok()) << attached.error().message;
-    thread_ = std::thread([this] { EXPECT_TRUE(server_->run().ok()); });
-    httplib::Client probe("127.0.0.1", server_->port());
-    for (int i = 0; i < 200 && !probe.Get("/healthz"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  ~RunningServer() {
-    server_->stop();
-    thread_.join();
-  }
-  std::string url() const { return "http://127.0.0.1:" + std::to_string(server_->port()); }
-
- private:
-  std::unique_ptr<server::Server> server_;
-  std::thread thread_;
-};
+using testing::RunningServer;
 
 TEST_F(RenderTest, ClientFrameMatchesTheGroundTruthFrame) {
   RunningServer running(served_store());

@@ -12,6 +12,7 @@
 #include "builder/receiver_sampler.hpp"
 #include "builder/scene_loader.hpp"
 #include "client/shadow_map.hpp"
+#include "tests/scene_build_config.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles {
@@ -21,15 +22,7 @@ class ShadowMapBatchTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new testing::TempDir();
-    BuildConfig config;
-    config.scene_path = testing::shared_scene("fzk_haus/fzk_haus.obj");
-    config.store_path = dir_->path() / "store";
-    config.resolution = 512;
-    config.tile_size = 64;
-    config.load.up = UpAxis::y;
-    config.light_direction = *light_direction_from_sun(120, 35, UpAxis::y);
-    config.methods = {store::Method::raw, store::Method::mh,   store::Method::mmh,
-                      store::Method::dagmh, store::Method::cpvs, store::Method::sst};
+    BuildConfig config = testing::fzk_haus_config(dir_->path() / "store", 512, testing::kEveryMethod);
     ASSERT_TRUE(run_build(config).ok());
     auto scene = load_scene(config.scene_path, config.load);
     ASSERT_TRUE(scene.ok());

@@ -10,6 +10,7 @@
 #include "builder/scene_loader.hpp"
 #include "builder/store_verifier.hpp"
 #include "client/shadow_map.hpp"
+#include "tests/scene_build_config.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles {
@@ -29,15 +30,8 @@ TEST_P(SstAllScenesAt4096, EveryTexelInsideItsInterval) {
   constexpr uint32_t kResolution = 4096, kTile = 1024;
   const std::vector<store::Method> methods{store::Method::mh, store::Method::sst};
   testing::TempDir dir;
-  BuildConfig config;
-  config.scene_path = testing::shared_scene(scene.file);
-  config.store_path = dir.path() / "s";
-  config.resolution = kResolution;
-  config.tile_size = kTile;
-  config.load.up = scene.up;
-  if (scene.heightfield) config.load.heightfield_meshes = {"*"};
-  config.light_direction = *light_direction_from_sun(135, scene.sun_elevation, scene.up);
-  config.methods = methods;
+  const BuildConfig config = testing::shared_scene_config({scene.file, scene.up, scene.heightfield}, dir.path() / "s",
+                                                         kResolution, kTile, methods, 135, scene.sun_elevation);
   auto summary = run_build(config);
   ASSERT_TRUE(summary.ok()) << summary.error().message;
   auto map = ShadowMap::open(config.store_path);

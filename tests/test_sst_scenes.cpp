@@ -11,32 +11,20 @@
 #include "builder/scene_loader.hpp"
 #include "builder/store_verifier.hpp"
 #include "client/shadow_map.hpp"
+#include "tests/scene_build_config.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles {
 namespace {
 
-struct SceneCase {
-  const char* file;
-  UpAxis up;
-  bool heightfield;
-};
+using SceneCase = testing::SharedSceneCase;
 
 constexpr SceneCase kTerrain{"terragen/RealisticTerrain.ply", UpAxis::z, true};
 constexpr SceneCase kHouse{"fzk_haus/fzk_haus.obj", UpAxis::y, false};
 
 BuildConfig config_for(const SceneCase& scene, const std::filesystem::path& out, uint32_t resolution, uint32_t tile,
                        std::vector<store::Method> methods) {
-  BuildConfig config;
-  config.scene_path = testing::shared_scene(scene.file);
-  config.store_path = out;
-  config.resolution = resolution;
-  config.tile_size = tile;
-  config.load.up = scene.up;
-  if (scene.heightfield) config.load.heightfield_meshes = {"*"};
-  config.light_direction = *light_direction_from_sun(135, 40, scene.up);
-  config.methods = std::move(methods);
-  return config;
+  return testing::shared_scene_config(scene, out, resolution, tile, std::move(methods));
 }
 
 void expect_lossless(const SceneCase& scene, uint32_t resolution, uint32_t tile, std::vector<store::Method> methods) {

@@ -31,6 +31,8 @@
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
 #include "store/tile_key.hpp"
+#include "tests/running_server.hpp"
+#include "tests/scene_build_config.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles {
@@ -43,51 +45,14 @@ constexpr const char* kBunny = "bunny/stanford-bunny.obj";
 constexpr size_t kPoints = 10000;
 
 BuildConfig bunny_config(const std::filesystem::path& out, std::vector<store::Method> methods) {
-  BuildConfig config;
-  config.scene_path = testing::shared_scene(kBunny);
-  config.store_path = out;
-  config.resolution = 1024;
-  config.tile_size = 128;
-  config.load.up = UpAxis::y;
-  config.light_direction = *light_direction_from_sun(135, 45, UpAxis::y);
-  config.methods = std::move(methods);
-  return config;
+  return testing::shared_scene_config({kBunny, UpAxis::y, false}, out, 1024, 128, std::move(methods), 135, 45);
 }
 
 void copy_store(const std::filesystem::path& from, const std::filesystem::path& to) {
   std::filesystem::copy(from, to, std::filesystem::copy_options::recursive);
 }
 
-// The real server on its own thread; stop() (or the destructor) stops and joins it.
-class RunningServer {
- public:
-  explicit RunningServer(const std::filesystem::path& store_dir) {
-    server::ServerConfig config;
-    config.port = 0;
-    config.max_batch_points = 20000;
-    config.keep_alive_timeout_s = 1;
-    auto bound = server::Server::bind(config);
-    EXPECT_TRUE(bound.ok()) << bound.error().message;
-    server_ = std::move(*bound);
-    Status attached = server_->attach_store(store_dir);
-    EXPECT_TRUE(attached.ok()) << attached.error().message;
-    thread_ = std::thread([this] { EXPECT_TRUE(server_->run().ok()); });
-    httplib::Client probe("127.0.0.1", port());
-    for (int i = 0; i < 200 && !probe.Get("/healthz"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  ~RunningServer() { stop(); }
-  void stop() {
-    if (!thread_.joinable()) return;
-    server_->stop();
-    thread_.join();
-  }
-  int port() const { return server_->port(); }
-  std::string url() const { return "http://127.0.0.1:" + std::to_string(port()); }
-
- private:
-  std::unique_ptr<server::Server> server_;
-  std::thread thread_;
-};
+using testing::RunningServer;
 
 // A loopback proxy in front of `upstream` that can damage tile blobs on the way: the first
 // `flips_left` answers for tile paths containing `target` get one payload bit flipped.

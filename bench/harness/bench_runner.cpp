@@ -12,7 +12,7 @@
 #include "bench/harness/lookup_rate.hpp"
 #include "bench/harness/machine_info.hpp"
 #include "bench/harness/store_sizes.hpp"
-#include "client/morton.hpp"
+#include "codec/morton.hpp"
 #include "builder/build_job.hpp"
 #include "builder/scene_loader.hpp"
 #include "builder/tile_encoder.hpp"

@@ -1,0 +1,48 @@
+// Build configs of real shared scenes for tests that build stores in-process: one place for the
+// scene's file, up axis, heightfield flag, sun and tiling, so each test states only what it varies.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+#include "builder/build_job.hpp"
+#include "tests/testing_support.hpp"
+
+namespace shadowtiles::testing {
+
+struct SharedSceneCase {
+  const char* file;  // under ../shared/scenes
+  UpAxis up;
+  bool heightfield;  // every mesh declared a heightfield (terrains)
+};
+
+// Every stored method, raw first.
+inline const std::vector<store::Method> kEveryMethod = {store::Method::raw,  store::Method::mh,
+                                                        store::Method::mmh,  store::Method::dagmh,
+                                                        store::Method::cpvs, store::Method::sst};
+
+inline BuildConfig shared_scene_config(const SharedSceneCase& scene, const std::filesystem::path& store,
+                                       uint32_t resolution, uint32_t tile, std::vector<store::Method> methods,
+                                       double sun_azimuth = 135, double sun_elevation = 40) {
+  BuildConfig config;
+  config.scene_path = shared_scene(scene.file);
+  config.store_path = store;
+  config.resolution = resolution;
+  config.tile_size = tile;
+  config.load.up = scene.up;
+  if (scene.heightfield) config.load.heightfield_meshes = {"*"};
+  config.light_direction = *light_direction_from_sun(sun_azimuth, sun_elevation, scene.up);
+  config.methods = std::move(methods);
+  return config;
+}
+
+// The small fzk_haus store the client-side tests (ShadowMap batch and concurrency, the C API) build
+// once per suite: sun at azimuth 120, elevation 35, tiles 64.
+inline BuildConfig fzk_haus_config(const std::filesystem::path& store, uint32_t resolution,
+                                   std::vector<store::Method> methods) {
+  return shared_scene_config({"fzk_haus/fzk_haus.obj", UpAxis::y, false}, store, resolution, 64, std::move(methods),
+                             120, 35);
+}
+
+}  // namespace shadowtiles::testing
