@@ -4,9 +4,13 @@
 // random point and PCF 3x3 lookups on each; sizes and lookup counts are accumulated over the tiles,
 // so a 64K^2 map never needs more than one tile in memory. Prints total payload bytes, DAG-MH/MMH
 // and lookup rates per (height, chunk) and resolution (text or --json; add -q to keep progress
-// lines out of stdout). Lookup rates: the fastest of three passes per tile.
+// lines out of stdout). Lookup rates: the fastest of three passes per tile. `--receivers` renders under
+// either receiver contract (docs/receiver-contracts.md); the report also counts the MH's values by
+// their interval's width (zero, under 8 exit margins, wider, misses), which is where DAG-MH's value
+// bytes go (docs/dagmh.md, "Under the surfaces contract").
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -25,6 +29,7 @@
 #include "builder/mh_encoder.hpp"
 #include "builder/mmh_merger.hpp"
 #include "builder/scene_loader.hpp"
+#include "builder/second_layer_rule.hpp"
 #include "cli/cli_parsing.hpp"
 #include "cli/commands.hpp"
 #include "cli/exit_codes.hpp"
@@ -39,7 +44,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 struct StudyFlags {
-  std::string scene, sun = "135,45", up = "z";
+  std::string scene, sun = "135,45", up = "z", receivers = "anywhere";
   std::vector<uint32_t> resolutions{16384};
   std::vector<std::string> heightfields;
   std::vector<unsigned> heights{2, 3, 4, 5}, chunks{16, 32, 64, 128};
@@ -115,6 +120,8 @@ struct ResolutionResult {
   PointTotals mmh;
   std::map<std::pair<unsigned, unsigned>, PointTotals> dag;
   DagMhSharingFigures sharing;  // one shape dictionary for all tiles, at the default treelet height
+  // MH values by their interval's width: zero, narrow (< 8 exit margins), wide, misses (upper +inf).
+  uint64_t values_zero = 0, values_narrow = 0, values_wide = 0, values_miss = 0;
   double seconds = 0;
 };
 
@@ -132,6 +139,9 @@ Result<ResolutionResult> study_resolution(const StudyFlags& flags, const Scene& 
   depth_options.exit_margin = float(frame->depth_from_world(flags.exit_margin_texels * frame->texel_size()));
   depth_options.open_exit_at_far_plane = build_defaults.open_exit_at_far_plane;
   depth_options.cap_exits_at_receiver_surfaces = build_defaults.cap_exits_at_receiver_surfaces;
+  depth_options.receivers = parse_receiver_contract(flags.receivers).value_or(ReceiverContract::anywhere);
+  depth_options.coplanar_epsilon = float(
+      second_layer::coplanar_epsilon(frame->depth_from_world(build_defaults.bias_texels * frame->texel_size())));
   DualDepthRenderer renderer(device, light_scene, depth_options);
 
   std::vector<TileCoord> tiles;
@@ -159,6 +169,14 @@ Result<ResolutionResult> study_resolution(const StudyFlags& flags, const Scene& 
     auto mh_bytes = encode_mh(*mh);
     if (!mh_bytes) return mh_bytes.error();
     r.mh_bytes += mh_bytes->size();
+    auto classify = [&](const DepthInterval& iv) {
+      if (!std::isfinite(iv.upper)) ++r.values_miss;
+      else if (iv.upper == iv.lower) ++r.values_zero;
+      else if (iv.upper - iv.lower < 8 * depth_options.exit_margin) ++r.values_narrow;
+      else ++r.values_wide;
+    };
+    classify(mh->root);  // the root always has a value: DAG-MH's value list is the root, then these
+    for (const DepthInterval& iv : mh->intervals) classify(iv);
     auto merged = merge_mmh(*mh);
     if (!merged) return merged.error();
     auto mmh_bytes = encode_mh(*merged);
@@ -209,6 +227,8 @@ nlohmann::json to_json(const ResolutionResult& r) {
           {"tiles", r.tiles},
           {"tiles_nonempty", r.tiles_nonempty},
           {"mh_bytes", r.mh_bytes},
+          {"mh_values",
+           {{"zero_width", r.values_zero}, {"narrow", r.values_narrow}, {"wide", r.values_wide}, {"miss", r.values_miss}}},
           {"mmh_bytes", r.mmh.bytes},
           {"mmh_point_random_per_second", r.mmh.point.per_second()},
           {"mmh_pcf3_random_per_second", r.mmh.pcf3.per_second()},
@@ -232,6 +252,9 @@ void print_text(const ResolutionResult& r) {
               r.resolution, (unsigned long long)r.tiles, (unsigned long long)r.tiles_nonempty, r.seconds,
               (unsigned long long)r.mh_bytes, (unsigned long long)r.mmh.bytes, r.mmh.point.per_second() / 1e6,
               r.mmh.pcf3.per_second() / 1e6);
+  std::printf("MH values by interval width: zero %llu, narrow (< 8 exit margins) %llu, wide %llu, misses %llu\n",
+              (unsigned long long)r.values_zero, (unsigned long long)r.values_narrow, (unsigned long long)r.values_wide,
+              (unsigned long long)r.values_miss);
   std::printf("%7s %6s %14s %10s %12s %12s\n", "height", "chunk", "bytes", "DAG/MMH", "point M/s", "pcf3 M/s");
   for (const auto& [key, t] : r.dag)
     std::printf("%7u %6u %14llu %10.4f %12.2f %12.2f\n", key.first, key.second, (unsigned long long)t.bytes,
@@ -265,6 +288,10 @@ int run(const StudyFlags& flags) {
         spdlog::error("treelet heights must be 2..5 and chunk sizes 1..1024");
         return kInvalidInput;
       }
+  if (!parse_receiver_contract(flags.receivers)) {
+    spdlog::error("--receivers: '{}' is not anywhere or surfaces", flags.receivers);
+    return kInvalidInput;
+  }
   if (flags.heights.empty() || flags.chunks.empty() || flags.lookups == 0) {
     spdlog::error("need at least one height, one chunk size and one lookup");
     return kInvalidInput;
@@ -311,6 +338,8 @@ void add_dagmh_study_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--sample-tiles", flags->sample_tiles, "Study only this many evenly spaced non-empty tiles (0: all)")
       ->capture_default_str();
   cmd->add_option("--exit-margin-texels", flags->exit_margin_texels, "As for build")->capture_default_str();
+  cmd->add_option("--receivers", flags->receivers, "Receiver contract, as for build: anywhere or surfaces")
+      ->capture_default_str();
   cmd->add_flag("--json", flags->json, "Print JSON");
   cmd->callback([flags, &exit_code] { exit_code = run(*flags); });
 }

@@ -130,5 +130,44 @@ TEST(DagMhStudy, CommandAgreesWithABuiltStore) {
       << output;
 }
 
+// Under the surfaces contract the study renders what a surfaces build stores, and its value classes
+// add up to DAG-MH's value count.
+TEST(DagMhStudy, SurfacesContractMatchesASurfacesBuildAndCountsEveryValue) {
+  testing::TempDir dir;
+  const std::string scene = testing::shared_scene("fzk_haus/fzk_haus.obj").string();
+  const std::string store = (dir.path() / "s").string();
+  std::string output;
+  ASSERT_EQ(testing::run_command(testing::cli_path().string() + " build " + scene +
+                                     " --up y -r 512 --tile 256 -m dagmh --receivers surfaces -q --out " + store,
+                                 &output),
+            0)
+      << output;
+  output.clear();
+  ASSERT_EQ(testing::run_command(testing::cli_path().string() + " inspect --json " + store + " 2>/dev/null", &output), 0)
+      << output;
+  const auto dagmh = nlohmann::json::parse(output)["methods"]["dagmh"];
+  output.clear();
+  ASSERT_EQ(testing::run_command(testing::cli_path().string() + " dagmh-study " + scene +
+                                     " --up y -r 512 --tile 256 --heights 4 --chunks 32 --lookups 100 --receivers surfaces"
+                                     " --json -q 2>/dev/null",
+                                 &output),
+            0)
+      << output;
+  const auto r512 = nlohmann::json::parse(output)["resolutions"][0];
+  ASSERT_EQ(r512["points"].size(), 1u);
+  EXPECT_EQ(r512["points"][0]["bytes"].get<uint64_t>(), dagmh["payload_bytes"].get<uint64_t>());
+  const auto& values = r512["mh_values"];
+  const uint64_t zero = values["zero_width"], narrow = values["narrow"], wide = values["wide"], miss = values["miss"];
+  EXPECT_EQ(zero + narrow + wide + miss, dagmh["dag"]["values"].get<uint64_t>());
+  EXPECT_GT(zero, 0u) << "fzk_haus has thin layers: some intervals have zero width under surfaces";
+  EXPECT_GT(wide, 0u);
+
+  output.clear();
+  EXPECT_EQ(testing::run_command(testing::cli_path().string() + " dagmh-study " + scene + " -r 256 --receivers nowhere 2>&1",
+                                 &output),
+            2)
+      << output;
+}
+
 }  // namespace
 }  // namespace shadowtiles
