@@ -92,6 +92,13 @@ const char* kFindings = R"(## Findings and fixes
    step behind the entry. CPVS still leaks most at grazing sun (scenario 3).
 5. **The far-plane exit rule** (MMH authors' code) lights the floor under a one-sided roof: scenario 1
    measures it; our rule (open mesh: exit = entry) keeps every lossless answer equal to raw's there.
+6. **Fixed: under `--receivers surfaces`, a receiver less than the bias under its occluder on a slope
+   leaked** (scenario 9, bunny 2048²: MH/MMH/DAG-MH 115 false lit vs raw 114 of 20,000). The coplanar
+   rule dropped it from the second layer, while raw, comparing with the texel centre's depth, shadowed
+   it. Fix (builder 0.3.2, docs/receiver-contracts.md "near cover"): a point covered by another surface
+   by less than the coplanar epsilon is in the second layer where it lies deeper than the texel's first
+   hit plus the bias, in the build's caps and in verify's reference. After: 114 vs 114, 0 worse; DAG-MH
+   40,441 → 41,889 B there. Regression test: `tests/test_second_layer_caps.cpp`.
 
 )";
 
