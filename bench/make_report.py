@@ -383,12 +383,15 @@ def report(doc, charts, md_path, sizes=()):
                       f"{100 * r['error_rate']:.3f}", mrate(r.get("lps_point_rows_t1")), mrate(r.get("lps_pcf5_rows_t1"))])
     out.append(table(["scene", "res", "method", "bytes", "err %", "point M/s", "pcf5 M/s"], lines))
     out.append("")
-    # The two-contract size table (bench/contract_sizes.py) comes from other runs: keep it.
+    # The query section (bench/query_report.py) and the two-contract size table (bench/contract_sizes.py)
+    # come from other runs: keep them.
     if os.path.exists(md_path):
         with open(md_path) as f:
-            kept = re.search(r"<!-- contract-sizes:begin -->.*?<!-- contract-sizes:end -->", f.read(), re.S)
-        if kept:
-            out += [kept.group(0), ""]
+            previous = f.read()
+        for name in ("queries", "contract-sizes"):
+            kept = re.search(f"<!-- {name}:begin -->.*?<!-- {name}:end -->", previous, re.S)
+            if kept:
+                out += [kept.group(0), ""]
     with open(md_path, "w") as f:
         f.write("\n".join(out))
 
