@@ -135,6 +135,7 @@ Result<DagMhTileView> DagMhTileView::parse(std::span<const uint8_t> payload, con
   if (H < F::kMinTreeletHeight || H > F::kMaxTreeletHeight) return corrupt("bad treelet height");
   if (wr < 1 || wr > 4 || wc < 1 || wc > 4 || wo < 1 || wo > 4) return corrupt("bad field width");
   if (C < 1 || C > F::kMaxChunkSize) return corrupt("bad chunk size");
+  view.chunk_shift_ = std::has_single_bit(C) ? uint8_t(std::countr_zero(C)) : uint8_t(0xff);
   if (N < 1) return corrupt("no values");
   view.treelet_bytes_ = F::treelet_bytes(H);
   const uint64_t chunk_count = (uint64_t(N) + C - 1) / C;
@@ -180,14 +181,6 @@ Result<DagMhTileView> DagMhTileView::parse(std::span<const uint8_t> payload, con
     t_values[t] = count;
     t_height[t] = uint8_t(height);
   }
-  // Treelets as 64-bit words for the lookups' rank (set bits before a node) by word popcounts.
-  view.treelet_words_per_ = unsigned((bits + 63) / 64);
-  view.treelet_words_.assign(size_t(treelet_count) * view.treelet_words_per_, 0);
-  for (uint32_t t = 0; t < treelet_count; ++t)
-    for (size_t q = 0; q < TB; ++q)
-      view.treelet_words_[size_t(t) * view.treelet_words_per_ + q / 8] |= uint64_t(view.treelets_[size_t(t) * TB + q])
-                                                                          << (8 * (q % 8));
-
   // DAG nodes tile their section in order; references point forward to node starts or to treelets.
   std::vector<uint32_t> starts;
   for (uint64_t at = 0; at < dag_bytes;) {
@@ -270,11 +263,9 @@ Result<DagMhTileView> DagMhTileView::parse(std::span<const uint8_t> payload, con
   if (root_height > L + 1) return corrupt("tree deeper than the tile's level count");
 
   // Chunks: offsets increasing from 0, each chunk exactly its computed size, all values finite.
-  view.chunk_offsets_.resize(chunk_count);
   view.payload_end_ = h + payload.size();
   for (uint64_t c = 0; c < chunk_count; ++c) {
     const uint64_t begin = load_uint(view.chunk_table_ + c * wo, wo);
-    view.chunk_offsets_[c] = uint32_t(begin);
     const uint64_t end = c + 1 < chunk_count ? load_uint(view.chunk_table_ + (c + 1) * wo, wo) : chunk_bytes;
     if ((c == 0 && begin != 0) || end < begin || end > chunk_bytes) return corrupt("bad chunk offsets");
     const uint64_t size = end - begin;
@@ -357,7 +348,8 @@ DagMhTileView::State DagMhTileView::start_state(uint32_t u, uint32_t v, unsigned
   return root_state();
 }
 
-void DagMhTileView::step(State& s, uint32_t u, uint32_t v) const {
+// The hot helpers are inlined into each walk (they are called per level and per query).
+[[gnu::always_inline]] inline void DagMhTileView::step(State& s, uint32_t u, uint32_t v) const {
   const uint8_t* node = dag_ + s.ref;
   const uint8_t mask = node[0];
   const unsigned i = child_index(u, v, levels_ - 1 - s.level);
@@ -386,8 +378,13 @@ void DagMhTileView::step(State& s, uint32_t u, uint32_t v) const {
   }
 }
 
-uint32_t DagMhTileView::treelet_find(const State& s, uint32_t u, uint32_t v, unsigned stop) const {
-  const uint64_t* t = treelet_words_.data() + size_t(s.ref) * treelet_words_per_;
+[[gnu::always_inline]] inline uint32_t DagMhTileView::treelet_find(const State& s, uint32_t u, uint32_t v,
+                                                                   unsigned stop) const {
+  // The bitmap is read in place as little-endian 64-bit words: bits at or past the treelet's end
+  // (the next treelet's, the chunk table's) never count, since only bits below a node's bit are
+  // ranked and every node's bit lies inside the treelet.
+  const uint8_t* t = treelets_ + size_t(s.ref) * treelet_bytes_;
+  auto word = [&](unsigned w) { return load_u64_before(t + 8 * w, payload_end_); };
   const unsigned d = std::min(H_ - 1, stop - s.level);
   uint32_t idx[F::kMaxTreeletHeight];
   idx[0] = 0;
@@ -396,9 +393,10 @@ uint32_t DagMhTileView::treelet_find(const State& s, uint32_t u, uint32_t v, uns
   // Finest level first: the deepest valued node on the path wins.
   for (unsigned n = d + 1; n-- > 0;) {
     const uint32_t bit = idx[n];
-    if ((t[bit / 64] >> (bit % 64)) & 1u) {
-      unsigned rank = popcount64(t[bit / 64] & low_bits(bit % 64));
-      for (unsigned w = 0; w < bit / 64; ++w) rank += popcount64(t[w]);
+    const uint64_t x = word(bit / 64);
+    if ((x >> (bit % 64)) & 1u) {
+      unsigned rank = popcount64(x & low_bits(bit % 64));
+      for (unsigned w = 0; w < bit / 64; ++w) rank += popcount64(word(w));
       return s.count + rank;
     }
   }
@@ -411,11 +409,15 @@ uint32_t DagMhTileView::resolve(State s, uint32_t u, uint32_t v, unsigned stop) 
   return s.last;
 }
 
-float DagMhTileView::value_at(uint32_t index) const {
+float DagMhTileView::value_at(uint32_t index) const { return value_of(index); }
+
+[[gnu::always_inline]] inline float DagMhTileView::value_of(uint32_t index) const {
   if (chunks_ == nullptr) return 1.0f;  // default-constructed view
   if (index >= value_count_) index = value_count_ - 1;
-  const uint32_t c = index / chunk_size_, j = index % chunk_size_;
-  const uint8_t* p = chunks_ + chunk_offsets_[c];
+  // Chunk sizes are powers of two in practice (the encoder's default is 32): a shift, not a divide.
+  const uint32_t c = chunk_shift_ != 0xff ? index >> chunk_shift_ : index / chunk_size_;
+  const uint32_t j = index - c * chunk_size_;
+  const uint8_t* p = chunks_ + load_uint(chunk_table_ + size_t(c) * wo_, wo_);
   const float rep = load_f32(p);
   const unsigned b = p[4];
   if (b == 0 || ((p[5 + j / 8] >> (j % 8)) & 1u) == 0) return rep;
@@ -442,7 +444,7 @@ float DagMhTileView::lookup(uint32_t u, uint32_t v, unsigned max_level) const {
   u &= size_ - 1;
   v &= size_ - 1;
   const unsigned stop = std::min(max_level, levels_);
-  return value_at(resolve(start_state(u, v, stop), u, v, stop));
+  return value_of(resolve(start_state(u, v, stop), u, v, stop));
 }
 
 void DagMhTileView::lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const {
@@ -476,7 +478,7 @@ void DagMhTileView::lit_sorted(std::span<const TexelQuery> queries, unsigned max
     }
     end = c.level;
     const uint32_t index = c.kind == kTreelet ? treelet_find(c, u, v, stop) : c.last;
-    if (index != cached_index) cached_index = index, cached_value = value_at(index);
+    if (index != cached_index) cached_index = index, cached_value = value_of(index);
     lit[i] = queries[i].threshold <= cached_value;
     pu = u;
     pv = v;
@@ -491,12 +493,17 @@ uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uin
   kh = std::min(kh, size_ - v0);
   if (kw == 0 || kh == 0) return 0;
   const uint32_t u1 = u0 + kw - 1, v1 = v0 + kh - 1;
-  const unsigned L = levels_;
-  const unsigned lca = L - unsigned(std::bit_width((u0 ^ u1) | (v0 ^ v1)));
+  const unsigned lca = levels_ - unsigned(std::bit_width((u0 ^ u1) | (v0 ^ v1)));
   State s = start_state(u0, v0, lca);
   while (s.kind == kDag && s.level < lca) step(s, u0, v0);
+  return count_from_ancestor(s, u0, v0, u1, v1, depth, bias);
+}
+
+uint32_t DagMhTileView::count_from_ancestor(State s, uint32_t u0, uint32_t v0, uint32_t u1, uint32_t v1,
+                                            float depth, float bias) const {
   // The walk ended at or above the common ancestor: one value decides the whole box.
-  if (s.kind == kDone) return depth <= value_at(s.last) + bias ? kw * kh : 0;
+  if (s.kind == kDone) return depth <= value_of(s.last) + bias ? (u1 - u0 + 1) * (v1 - v0 + 1) : 0;
+  const unsigned L = levels_;
   // Last-node cache: path[l] is the previous sample's state at level l (lca <= l <= end); each sample
   // resumes from the deepest level it shares with the previous one.
   State path[F::kMaxLevels + 1];
@@ -515,10 +522,47 @@ uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uin
       end = c.level;
       pu = u, pv = v;
       const uint32_t index = c.kind == kTreelet ? treelet_find(c, u, v, L) : c.last;
-      if (index != cached_index) cached_index = index, cached_value = value_at(index);
+      if (index != cached_index) cached_index = index, cached_value = value_of(index);
       lit += depth <= cached_value + bias;
     }
   return lit;
+}
+
+void DagMhTileView::pcf_count_sorted(std::span<const TexelQuery> corners, uint32_t k, uint32_t* counts) const {
+  for (const TexelQuery& c : corners)
+    if (size_ == 0 || k == 0 || c.u >= size_ || c.v >= size_ || k > size_ - c.u || k > size_ - c.v) {
+      // Out of contract (or a default-constructed view): answered as pcf_lit_count does, one by one.
+      for (size_t i = 0; i < corners.size(); ++i)
+        counts[i] = pcf_lit_count(corners[i].u, corners[i].v, k, k, corners[i].threshold, 0.0f);
+      return;
+    }
+  const unsigned L = levels_;
+  State path[F::kMaxLevels + 1];  // path[base..end]: the previous box's walk toward its corner
+  unsigned base = 0, end = 0;
+  uint32_t pu = 0, pv = 0;
+  for (size_t i = 0; i < corners.size(); ++i) {
+    const uint32_t u0 = corners[i].u, v0 = corners[i].v, u1 = u0 + k - 1, v1 = v0 + k - 1;
+    const unsigned lca = L - unsigned(std::bit_width((u0 ^ u1) | (v0 ^ v1)));
+    const unsigned shared = L - unsigned(std::bit_width((u0 ^ pu) | (v0 ^ pv)));
+    State s;
+    if (i > 0 && shared >= base && lca >= base) {
+      // Nodes down to `shared` lie on both corners' paths; the walk toward this corner goes on there.
+      s = path[std::min({shared, end, lca})];
+    } else {
+      // A skip-list entry answers for its cell only (as in lit_sorted).
+      s = start_state(u0, v0, lca);
+      base = skip_level_ != 0 && lca >= skip_level_ ? skip_level_ : 0;
+      path[s.level] = s;
+    }
+    while (s.kind == kDag && s.level < lca) {
+      step(s, u0, v0);
+      if (s.kind != kDone) path[s.level] = s;
+    }
+    end = s.level;
+    pu = u0;
+    pv = v0;
+    counts[i] = count_from_ancestor(s, u0, v0, u1, v1, corners[i].threshold, 0.0f);
+  }
 }
 
 }  // namespace shadowtiles

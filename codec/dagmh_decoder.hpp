@@ -61,11 +61,9 @@ class DagMhTileView {
   uint32_t size() const { return size_; }
   unsigned levels() const { return levels_; }
   const DagMhStats& stats() const { return stats_; }
-  // Bytes the view holds beside the payload (skip list, treelet words, chunk offsets).
-  size_t derived_bytes() const {
-    return skip_.size() * sizeof(State) + treelet_words_.size() * sizeof(uint64_t) +
-           chunk_offsets_.size() * sizeof(uint32_t);
-  }
+  // Bytes the view holds beside the payload: the skip list only (at most an eighth of the payload;
+  // treelets and chunk offsets are read in place).
+  size_t derived_bytes() const { return skip_.size() * sizeof(State); }
 
   // Value of texel (u, v) walking at most down to `max_level` (0 = root; levels() or more = full
   // resolution). Preconditions: u, v < size() (asserted; masked in release builds).
@@ -79,6 +77,12 @@ class DagMhTileView {
   // Batch: lit[i] = threshold_i <= lookup(u_i, v_i, max_level); Morton-sorted queries share their
   // descents (each resumes from the deepest node shared with the previous one) and value reads.
   void lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const;
+
+  // Batch PCF: counts[i] = pcf_lit_count(c.u, c.v, k, k, c.threshold, 0) for the k x k boxes whose
+  // lower corners c = corners[i] are sorted along the Morton curve (any order is answered correctly):
+  // each box's descent to its common ancestor resumes from the previous box's path. Preconditions
+  // as pcf_lit_count's (boxes inside the tile); out-of-contract boxes are answered one by one.
+  void pcf_count_sorted(std::span<const TexelQuery> corners, uint32_t k, uint32_t* counts) const;
 
   // Value number `index` of the depth-first list (< stats().values; masked otherwise).
   float value_at(uint32_t index) const;
@@ -97,6 +101,11 @@ class DagMhTileView {
   void step(State& s, uint32_t u, uint32_t v) const;  // DAG node -> child
   uint32_t resolve(State s, uint32_t u, uint32_t v, unsigned stop) const;
   uint32_t treelet_find(const State& s, uint32_t u, uint32_t v, unsigned stop) const;
+  float value_of(uint32_t index) const;  // value_at, inlined into the walks
+  // Lit samples of the box [u0, u1] x [v0, v1] from `s`, the walk toward (u0, v0) stopped at or
+  // above the box's common ancestor (per sample, resuming from the previous sample's path).
+  uint32_t count_from_ancestor(State s, uint32_t u0, uint32_t v0, uint32_t u1, uint32_t v1, float depth,
+                               float bias) const;
 
   const uint8_t* dag_ = nullptr;
   const uint8_t* treelets_ = nullptr;
@@ -104,16 +113,13 @@ class DagMhTileView {
   const uint8_t* chunks_ = nullptr;
   uint32_t size_ = 0;
   unsigned levels_ = 0, H_ = 0, wr_ = 0, wc_ = 0, wo_ = 0, chunk_size_ = 1;
+  uint8_t chunk_shift_ = 0;  // log2(chunk_size_) when it is a power of two, else 0xff
   size_t treelet_bytes_ = 0;
   uint8_t root_kind_ = 0;
   uint32_t root_ref_ = 0;
   uint32_t value_count_ = 0;
   unsigned skip_level_ = 0;
   std::vector<State> skip_;
-  // Derived at parse, for speed: treelet bitmaps as 64-bit words, chunk offsets at full width.
-  unsigned treelet_words_per_ = 1;
-  std::vector<uint64_t> treelet_words_;
-  std::vector<uint32_t> chunk_offsets_;
   const uint8_t* payload_end_ = nullptr;
   DagMhStats stats_;
 };

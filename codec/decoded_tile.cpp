@@ -107,6 +107,9 @@ class DagMhDecodedTile final : public DecodedTile {
   void lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const override {
     view_.lit_sorted(queries, max_level == 255 ? kDagMhAllLevels : max_level, lit);
   }
+  void lit_count_sorted(std::span<const TexelQuery> corners, uint32_t k, uint32_t* counts) const override {
+    view_.pcf_count_sorted(corners, k, counts);
+  }
   // SE21 Tables 3 and 4: topology (DAG nodes, treelets) against values (chunk parts).
   std::vector<SizePart> size_breakdown() const override {
     const DagMhStats& st = view_.stats();
