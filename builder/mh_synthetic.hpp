@@ -19,6 +19,11 @@ enum class MhSyntheticKind {
   boxes_and_misses,  // closed boxes floating over nothing: box intervals and misses
 };
 
+// Every kind, for tests that sweep them all.
+inline constexpr MhSyntheticKind kEveryMhSyntheticKind[] = {
+    MhSyntheticKind::random_intervals, MhSyntheticKind::noisy_plane, MhSyntheticKind::closed_plane,
+    MhSyntheticKind::steps,            MhSyntheticKind::all_miss,    MhSyntheticKind::boxes_and_misses};
+
 TileIntervals make_synthetic_tile(MhSyntheticKind kind, uint32_t size, uint64_t seed);
 const char* synthetic_kind_name(MhSyntheticKind kind);
 

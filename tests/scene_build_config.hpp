@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <vector>
 
+#include <gtest/gtest.h>
+
 #include "builder/build_job.hpp"
 #include "tests/testing_support.hpp"
 
@@ -44,5 +46,22 @@ inline BuildConfig fzk_haus_config(const std::filesystem::path& store, uint32_t 
   return shared_scene_config({"fzk_haus/fzk_haus.obj", UpAxis::y, false}, store, resolution, 64, std::move(methods),
                              120, 35);
 }
+
+// A suite fixture holding one store built once for all its tests and the query points they share:
+// the derived suite's SetUpTestSuite builds into store() and fills points_; both are freed after the
+// suite. (One set of statics per derived suite.)
+template <typename Suite>
+class BuiltStoreSuite : public ::testing::Test {
+ protected:
+  static void TearDownTestSuite() {
+    delete points_;
+    points_ = nullptr;
+    delete dir_;
+    dir_ = nullptr;
+  }
+  static std::filesystem::path store() { return dir_->path() / "store"; }
+  static inline TempDir* dir_ = nullptr;
+  static inline std::vector<Vec3>* points_ = nullptr;
+};
 
 }  // namespace shadowtiles::testing

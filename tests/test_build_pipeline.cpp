@@ -16,6 +16,7 @@
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
 #include "store/tile_key.hpp"
+#include "tests/store_damage.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles {
@@ -160,17 +161,7 @@ TEST(EndToEnd, CorruptBlobIsAnErrorNeverAnAnswer) {
   ASSERT_TRUE(run_build(config_for(testing::shared_scene("bunny/stanford-bunny.obj"), dir.path() / "s", 512, 512,
                                    UpAxis::y))
                   .ok());
-  {
-    auto store = store::Store::open(dir.path() / "s", {store::Store::Mode::read_write});
-    ASSERT_TRUE(store.ok());
-    auto key = store::encode_tile_key({store::Method::raw, 0, 0, 0});
-    auto blob = (*store)->get(store::Database::tiles, key);
-    ASSERT_TRUE(blob.ok() && blob->has_value());
-    std::vector<uint8_t> bytes = **blob;
-    bytes[bytes.size() / 2] ^= 0x10;
-    std::vector<store::Store::Put> puts{{store::Database::tiles, {key.begin(), key.end()}, bytes}};
-    ASSERT_TRUE((*store)->write(puts).ok());
-  }
+  testing::flip_a_bit_in_stored_tile(dir.path() / "s", {store::Method::raw, 0, 0, 0});
   auto map = ShadowMap::open(dir.path() / "s");
   ASSERT_TRUE(map.ok());
   auto value = (*map)->texel_value(store::Method::raw, 100, 100);

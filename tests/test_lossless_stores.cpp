@@ -12,6 +12,7 @@
 #include "store/lmdb_store.hpp"
 #include "tests/scene_build_config.hpp"
 #include "tests/testing_support.hpp"
+#include "tests/verified_build.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -32,25 +33,11 @@ BuildConfig config_for(const SceneCase& scene, const std::filesystem::path& out,
 
 void expect_lossless(const SceneCase& scene, uint32_t resolution, uint32_t tile) {
   testing::TempDir dir;
-  auto summary = run_build(config_for(scene, dir.path() / "s", resolution, tile));
-  ASSERT_TRUE(summary.ok()) << summary.error().message;
-  auto map = ShadowMap::open(dir.path() / "s");
-  ASSERT_TRUE(map.ok()) << map.error().message;
-  LoadOptions load;
-  load.up = scene.up;
-  load.heightfield_meshes = (*map)->meta().heightfield_meshes;
-  auto loaded = load_scene(testing::shared_scene(scene.file), load);
-  ASSERT_TRUE(loaded.ok());
-  auto report = verify_store(**map, *loaded,
-                             {store::Method::raw, store::Method::mh, store::Method::mmh, store::Method::dagmh});
-  ASSERT_TRUE(report.ok()) << report.error().message;
-  const auto& bytes = summary->stats["bytes_by_method"];
-  for (store::Method m : {store::Method::mh, store::Method::mmh, store::Method::dagmh}) {
-    const MethodVerification& v = report->methods.at(m);
-    EXPECT_EQ(v.texels, uint64_t(resolution) * resolution) << "every texel of the map is checked";
-    EXPECT_EQ(v.outside, 0u) << store::method_name(m) << ": " << v.first_violation;
-    EXPECT_EQ(v.wrong_answers, 0u) << store::method_name(m);
-  }
+  auto verified = testing::build_and_verify_every_texel(config_for(scene, dir.path() / "s", resolution, tile),
+                                                        {store::Method::raw, store::Method::mh, store::Method::mmh,
+                                                         store::Method::dagmh});
+  ASSERT_TRUE(verified.has_value());
+  const auto& bytes = verified->stats["bytes_by_method"];
   EXPECT_LE(bytes["mmh"].get<uint64_t>(), bytes["mh"].get<uint64_t>()) << "merging never grows a tile";
   if (scene.expect_smaller_than_raw) {
     EXPECT_LT(bytes["mh"].get<uint64_t>(), bytes["raw"].get<uint64_t>());

@@ -19,9 +19,7 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-const MhSyntheticKind kKinds[] = {MhSyntheticKind::random_intervals, MhSyntheticKind::noisy_plane,
-                                  MhSyntheticKind::closed_plane,     MhSyntheticKind::steps,
-                                  MhSyntheticKind::all_miss,         MhSyntheticKind::boxes_and_misses};
+constexpr auto& kKinds = kEveryMhSyntheticKind;
 
 struct Encoded {
   std::vector<uint8_t> bytes;

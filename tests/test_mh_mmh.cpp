@@ -14,9 +14,7 @@
 namespace shadowtiles {
 namespace {
 
-const MhSyntheticKind kKinds[] = {MhSyntheticKind::random_intervals, MhSyntheticKind::noisy_plane,
-                                  MhSyntheticKind::closed_plane,     MhSyntheticKind::steps,
-                                  MhSyntheticKind::all_miss,         MhSyntheticKind::boxes_and_misses};
+constexpr auto& kKinds = kEveryMhSyntheticKind;
 
 struct Built {
   std::vector<uint8_t> mh_bytes, mmh_bytes;

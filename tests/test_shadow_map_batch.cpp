@@ -18,7 +18,7 @@
 namespace shadowtiles {
 namespace {
 
-class ShadowMapBatchTest : public ::testing::Test {
+class ShadowMapBatchTest : public testing::BuiltStoreSuite<ShadowMapBatchTest> {
  protected:
   static void SetUpTestSuite() {
     dir_ = new testing::TempDir();
@@ -50,16 +50,7 @@ class ShadowMapBatchTest : public ::testing::Test {
     points_->push_back(m.frame().to_world({0.0, 0.0, 0.999}));
     points_->push_back(m.frame().to_world({R - 0.01, R - 0.01, 0.1}));
   }
-  static void TearDownTestSuite() {
-    delete points_;
-    delete dir_;
-  }
-  static std::filesystem::path store() { return dir_->path() / "store"; }
-  static testing::TempDir* dir_;
-  static std::vector<Vec3>* points_;
 };
-testing::TempDir* ShadowMapBatchTest::dir_ = nullptr;
-std::vector<Vec3>* ShadowMapBatchTest::points_ = nullptr;
 
 // Single-point answers as the batch reports them.
 std::vector<float> single_answers(const ShadowMap& map, store::Method method, std::span<const Vec3> points,

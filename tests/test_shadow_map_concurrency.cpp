@@ -21,7 +21,7 @@ namespace {
 
 constexpr unsigned kThreads = 8;
 
-class ShadowMapConcurrencyTest : public ::testing::Test {
+class ShadowMapConcurrencyTest : public testing::BuiltStoreSuite<ShadowMapConcurrencyTest> {
  protected:
   static void SetUpTestSuite() {
     dir_ = new testing::TempDir();
@@ -32,16 +32,7 @@ class ShadowMapConcurrencyTest : public ::testing::Test {
     points_ = new std::vector<Vec3>;
     for (const Receiver& r : sample_receivers(*scene, 2000, 5)) points_->push_back(r.position);
   }
-  static void TearDownTestSuite() {
-    delete points_;
-    delete dir_;
-  }
-  static std::filesystem::path store() { return dir_->path() / "store"; }
-  static testing::TempDir* dir_;
-  static std::vector<Vec3>* points_;
 };
-testing::TempDir* ShadowMapConcurrencyTest::dir_ = nullptr;
-std::vector<Vec3>* ShadowMapConcurrencyTest::points_ = nullptr;
 
 // Answer of one query as a comparable number: lit (0/1) for kernel 1, the PCF fraction otherwise;
 // -1 for an error.

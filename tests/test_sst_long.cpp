@@ -12,6 +12,7 @@
 #include "client/shadow_map.hpp"
 #include "tests/scene_build_config.hpp"
 #include "tests/testing_support.hpp"
+#include "tests/verified_build.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -32,25 +33,12 @@ TEST_P(SstAllScenesAt4096, EveryTexelInsideItsInterval) {
   testing::TempDir dir;
   const BuildConfig config = testing::shared_scene_config({scene.file, scene.up, scene.heightfield}, dir.path() / "s",
                                                          kResolution, kTile, methods, 135, scene.sun_elevation);
-  auto summary = run_build(config);
-  ASSERT_TRUE(summary.ok()) << summary.error().message;
-  auto map = ShadowMap::open(config.store_path);
-  ASSERT_TRUE(map.ok()) << map.error().message;
-  LoadOptions load;
-  load.up = scene.up;
-  load.heightfield_meshes = (*map)->meta().heightfield_meshes;
-  auto loaded = load_scene(config.scene_path, load);
-  ASSERT_TRUE(loaded.ok());
-  auto report = verify_store(**map, *loaded, methods);
-  ASSERT_TRUE(report.ok()) << report.error().message;
-  const MethodVerification& v = report->methods.at(store::Method::sst);
-  EXPECT_EQ(v.texels, uint64_t(kResolution) * kResolution);
-  EXPECT_EQ(v.outside, 0u) << v.first_violation;
-  EXPECT_EQ(v.wrong_answers, 0u);
-  const auto& bytes = summary->stats["bytes_by_method"];
+  auto verified = testing::build_and_verify_every_texel(config, methods);
+  ASSERT_TRUE(verified.has_value());
+  const auto& bytes = verified->stats["bytes_by_method"];
   std::printf("[ figures  ] %s 4096^2: sst %llu bytes, mh %llu bytes, %llu texels checked\n", scene.file,
               (unsigned long long)bytes["sst"].get<uint64_t>(), (unsigned long long)bytes["mh"].get<uint64_t>(),
-              (unsigned long long)v.texels);
+              (unsigned long long)verified->texels);
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -13,6 +13,7 @@
 #include "client/shadow_map.hpp"
 #include "tests/scene_build_config.hpp"
 #include "tests/testing_support.hpp"
+#include "tests/verified_build.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -29,24 +30,10 @@ BuildConfig config_for(const SceneCase& scene, const std::filesystem::path& out,
 
 void expect_lossless(const SceneCase& scene, uint32_t resolution, uint32_t tile, std::vector<store::Method> methods) {
   testing::TempDir dir;
-  auto summary = run_build(config_for(scene, dir.path() / "s", resolution, tile, methods));
-  ASSERT_TRUE(summary.ok()) << summary.error().message;
-  auto map = ShadowMap::open(dir.path() / "s");
-  ASSERT_TRUE(map.ok()) << map.error().message;
-  LoadOptions load;
-  load.up = scene.up;
-  load.heightfield_meshes = (*map)->meta().heightfield_meshes;
-  auto loaded = load_scene(testing::shared_scene(scene.file), load);
-  ASSERT_TRUE(loaded.ok());
-  auto report = verify_store(**map, *loaded, methods);
-  ASSERT_TRUE(report.ok()) << report.error().message;
-  for (store::Method m : methods) {
-    const MethodVerification& v = report->methods.at(m);
-    EXPECT_EQ(v.texels, uint64_t(resolution) * resolution) << "every texel of the map is checked";
-    EXPECT_EQ(v.outside, 0u) << store::method_name(m) << ": " << v.first_violation;
-    EXPECT_EQ(v.wrong_answers, 0u) << store::method_name(m);
-  }
-  const auto& bytes = summary->stats["bytes_by_method"];
+  auto verified = testing::build_and_verify_every_texel(config_for(scene, dir.path() / "s", resolution, tile, methods),
+                                                        methods);
+  ASSERT_TRUE(verified.has_value());
+  const auto& bytes = verified->stats["bytes_by_method"];
   std::printf("[ figures  ] %s %u^2 tiles %u: bytes", scene.file, resolution, tile);
   for (store::Method m : methods)
     std::printf(" %s %llu", store::method_name(m), (unsigned long long)bytes[store::method_name(m)].get<uint64_t>());

@@ -33,6 +33,7 @@
 #include "store/tile_key.hpp"
 #include "tests/running_server.hpp"
 #include "tests/scene_build_config.hpp"
+#include "tests/store_damage.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles {
@@ -327,17 +328,7 @@ TEST_F(DamagedStoreTest, ACorruptStoredBlobIsReportedNeverDecoded) {
   // A tile that holds geometry: the one under the first point.
   const TileCoord target = *(*meta_map)->tile_of((*points_)[0]);
   meta_map->reset();
-  {
-    auto store = store::Store::open(damaged, {store::Store::Mode::read_write});
-    ASSERT_TRUE(store.ok());
-    auto key = store::encode_tile_key({store::Method::raw, level, target.x, target.y});
-    auto blob = (*store)->get(store::Database::tiles, key);
-    ASSERT_TRUE(blob.ok() && blob->has_value());
-    std::vector<uint8_t> bytes = **blob;
-    bytes[bytes.size() / 2] ^= 0x10;
-    std::vector<store::Store::Put> puts{{store::Database::tiles, {key.begin(), key.end()}, bytes}};
-    ASSERT_TRUE((*store)->write(puts).ok());
-  }
+  testing::flip_a_bit_in_stored_tile(damaged, {store::Method::raw, level, target.x, target.y});
   RunningServer running(damaged);
   StreamingOptions options;
   options.http = fast_retries();
