@@ -128,4 +128,31 @@ inline int read_port(FILE* out) {
   return -1;
 }
 
+// A `shadowtiles serve ARGS` child process, started through sh so that its pid is known ($$ before
+// exec); port is -1 when it never printed its listening line.
+struct ServeChild {
+  FILE* out = nullptr;
+  int pid = -1;
+  int port = -1;
+};
+
+inline ServeChild start_serve_child(const std::string& args) {
+  ServeChild child;
+  const std::string command = "sh -c 'echo pid $$; exec " + testing::cli_path().string() + " serve " + args + "' 2>&1";
+  child.out = ::popen(command.c_str(), "r");
+  if (!child.out) return child;
+  if (std::fscanf(child.out, "pid %d\n", &child.pid) != 1) return child;
+  child.port = read_port(child.out);
+  return child;
+}
+
+// Reads the child's remaining output into `rest` and waits for it; returns its waitpid status.
+inline int finish_serve_child(ServeChild& child, std::string* rest) {
+  char buffer[512];
+  while (std::fgets(buffer, sizeof buffer, child.out)) *rest += buffer;
+  const int status = ::pclose(child.out);
+  child.out = nullptr;
+  return status;
+}
+
 }  // namespace shadowtiles::server_testing

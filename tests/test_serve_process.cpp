@@ -52,13 +52,11 @@ TEST(ServeCommand, ConfigFlagsAndSigtermDrain) {
   EXPECT_EQ(testing::run_command(cli + " serve " + (dir.path() / "missing").string() + " --port 0", &output), 2) << output;
 
   // The child's pid is the shell's ($$) because of exec.
-  std::string command = "sh -c 'echo pid $$; exec " + cli + " serve " + store_dir.string() +
-                        " --port 0 --config " + SHADOWTILES_SOURCE_DIR + "/config/serve.json' 2>&1";
-  FILE* child = ::popen(command.c_str(), "r");
-  ASSERT_NE(child, nullptr);
-  int pid = -1;
-  ASSERT_EQ(std::fscanf(child, "pid %d\n", &pid), 1);
-  int port = read_port(child);
+  ServeChild child = start_serve_child(store_dir.string() + " --port 0 --config " + SHADOWTILES_SOURCE_DIR +
+                                       "/config/serve.json");
+  ASSERT_NE(child.out, nullptr);
+  ASSERT_GT(child.pid, 0);
+  const int pid = child.pid, port = child.port;
   ASSERT_GT(port, 0);
   httplib::Client client("127.0.0.1", port);
   auto health = client.Get("/healthz");
@@ -80,9 +78,7 @@ TEST(ServeCommand, ConfigFlagsAndSigtermDrain) {
   ASSERT_EQ(::kill(pid, SIGTERM), 0);
   batch.join();
   std::string rest;
-  char buffer[512];
-  while (std::fgets(buffer, sizeof buffer, child)) rest += buffer;
-  int status = ::pclose(child);
+  const int status = finish_serve_child(child, &rest);
   ASSERT_TRUE(WIFEXITED(status)) << rest;
   EXPECT_EQ(WEXITSTATUS(status), 0) << rest;
   EXPECT_NE(rest.find("stopped on signal"), std::string::npos) << rest;
@@ -101,22 +97,17 @@ TEST(ServeCommand, StoreKeyOfTheConfig) {
   EXPECT_NE(output.find("\"store\" key"), std::string::npos) << output;
 
   std::ofstream(dir.path() / "unit.json") << json{{"store", store_dir.string()}, {"port", 0}}.dump();
-  std::string command = "sh -c 'echo pid $$; exec " + cli + " serve --config " + (dir.path() / "unit.json").string() +
-                        "' 2>&1";
-  FILE* child = ::popen(command.c_str(), "r");
-  ASSERT_NE(child, nullptr);
-  int pid = -1;
-  ASSERT_EQ(std::fscanf(child, "pid %d\n", &pid), 1);
-  int port = read_port(child);
+  ServeChild child = start_serve_child("--config " + (dir.path() / "unit.json").string());
+  ASSERT_NE(child.out, nullptr);
+  ASSERT_GT(child.pid, 0);
+  const int pid = child.pid, port = child.port;
   ASSERT_GT(port, 0);
   auto health = httplib::Client("127.0.0.1", port).Get("/healthz");
   ::kill(pid, SIGTERM);
   ASSERT_TRUE(health);
   EXPECT_EQ(health->status, 200);
   std::string rest;
-  char buffer[512];
-  while (std::fgets(buffer, sizeof buffer, child)) rest += buffer;
-  int status = ::pclose(child);
+  const int status = finish_serve_child(child, &rest);
   ASSERT_TRUE(WIFEXITED(status)) << rest;
   EXPECT_EQ(WEXITSTATUS(status), 0) << rest;
 }
