@@ -5,10 +5,13 @@ decoded in memory: 34 GB at 64K^2, more than the machine has).
 
     python3 bench/build_sizes.py --config config/bench-standard.json --resolution 65536 \
         --methods mh,mmh,dagmh --out out/sizes-64k.json [--scenes a,b] [--cli build/cli/shadowtiles]
-        [--receivers anywhere,surfaces]
+        [--receivers anywhere,surfaces] [--accuracy 20000]
 
 With --receivers, every scene is built once per receiver contract (docs/receiver-contracts.md) and
 each entry records its contract; bench/contract_sizes.py turns such a run into the two-contract table.
+With --accuracy N, each store is kept until `shadowtiles accuracy` has counted every method's false-lit
+and false-shadowed answers on N surface receivers against Embree ground truth (the bench's evaluator,
+tile by tile through ShadowMap, so no whole map is decoded); the counts go into the entry.
 
 One `shadowtiles build --json` per scene (same sun, up axis and heightfield flags as the bench),
 the store deleted afterwards. The output is rewritten after every scene and scenes already in it
@@ -33,6 +36,7 @@ def main():
     ap.add_argument("--cli", default="build/cli/shadowtiles", help="the shadowtiles executable")
     ap.add_argument("--receivers", default="anywhere", help="receiver contracts to build, comma-separated")
     ap.add_argument("--work", default="out/build-sizes-store", help="scratch store directory")
+    ap.add_argument("--accuracy", type=int, default=0, help="surface receivers for the error counts (0: none)")
     args = ap.parse_args()
 
     with open(args.config) as f:
@@ -64,13 +68,24 @@ def main():
         print(f"{name} {args.resolution}^2 {receivers}: {' '.join(cmd)}", flush=True)
         start = time.time()
         result = subprocess.run(cmd, capture_output=True, text=True)
+        wall = time.time() - start
+        accuracy = None
+        if result.returncode == 0 and args.accuracy > 0:
+            acc = subprocess.run([args.cli, "-q", "accuracy", args.work, os.path.join(root, scene["file"]),
+                                  "--receivers", str(args.accuracy), "--json"], capture_output=True, text=True)
+            if acc.returncode != 0:
+                shutil.rmtree(args.work, ignore_errors=True)
+                sys.exit(f"accuracy of {name} failed ({acc.returncode}):\n{acc.stderr}")
+            accuracy = json.loads(acc.stdout)
         shutil.rmtree(args.work, ignore_errors=True)
         if result.returncode != 0:
             sys.exit(f"build of {name} failed ({result.returncode}):\n{result.stderr}")
         stats = json.loads(result.stdout)
         stats = stats.get("stats", stats)
-        entry = {"scene": name, "resolution": args.resolution, "receivers": receivers, "wall_s": time.time() - start,
+        entry = {"scene": name, "resolution": args.resolution, "receivers": receivers, "wall_s": wall,
                  "stats": stats}
+        if accuracy is not None:
+            entry["accuracy"] = accuracy
         doc["scenes"].append(entry)
         with open(args.out + ".tmp", "w") as f:
             json.dump(doc, f, indent=1)

@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   shadowtiles::cli::add_build_command(app, exit_code);
   shadowtiles::cli::add_merge_command(app, exit_code);
   shadowtiles::cli::add_store_diff_command(app, exit_code);
+  shadowtiles::cli::add_accuracy_command(app, exit_code);
   shadowtiles::cli::add_query_command(app, exit_code);
   shadowtiles::cli::add_inspect_command(app, exit_code);
   shadowtiles::cli::add_verify_command(app, exit_code);

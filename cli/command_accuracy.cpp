@@ -1,0 +1,109 @@
+// `shadowtiles accuracy STORE SCENE [--receivers N] [--seed S] [--json]`: every stored method's
+// lit/shadowed answers on N receivers sampled uniformly on the scene's surfaces, against an Embree
+// occlusion ray toward the sun (builder/accuracy.hpp, the bench's own evaluator: same receivers,
+// same truth, same default bias). Raw, when stored, answers first and the others are compared with
+// it. Queries go through ShadowMap tile by tile, so no whole map is decoded (it works on 65536^2
+// stores). The scene is loaded with the up axis and heightfield meshes the store records.
+// Used by bench/build_sizes.py --accuracy for the two-contract size and leak table.
+// Exit codes: 0, 1 (failure), 2 (bad arguments), 4 (store or scene unreadable).
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "builder/accuracy.hpp"
+#include "builder/embree_device.hpp"
+#include "builder/receiver_sampler.hpp"
+#include "builder/scene_loader.hpp"
+#include "cli/commands.hpp"
+#include "cli/exit_codes.hpp"
+#include "client/shadow_map.hpp"
+#include "codec/receiver_contract.hpp"
+
+namespace shadowtiles::cli {
+namespace {
+
+struct AccuracyFlags {
+  std::string store, scene;
+  size_t receivers = 20000;
+  uint64_t seed = 1;
+  bool json = false;
+};
+
+int run(const AccuracyFlags& flags) {
+  auto map = ShadowMap::open(flags.store);
+  if (!map) {
+    spdlog::error("cannot open store: {}", map.error().message);
+    return exit_code_for(map.error());
+  }
+  const StoreMeta& meta = (*map)->meta();
+  LoadOptions load;
+  load.up = meta.up_axis == "y" ? UpAxis::y : UpAxis::z;
+  load.heightfield_meshes = meta.heightfield_meshes;
+  auto scene = load_scene(flags.scene, load);
+  if (!scene) {
+    spdlog::error("{}", scene.error().message);
+    return exit_code_for(scene.error());
+  }
+  if (scene->triangle_count() != meta.scene_triangles) {
+    spdlog::error("{} has {} triangles, the store was built from {}: not the store's scene", flags.scene,
+                  scene->triangle_count(), meta.scene_triangles);
+    return kInvalidInput;
+  }
+  auto device = EmbreeDevice::create();
+  if (!device) {
+    spdlog::error("{}", device.error().message);
+    return kFailure;
+  }
+  const std::vector<Receiver> receivers = sample_receivers(*scene, flags.receivers, flags.seed);
+  GroundTruth truth(*device, *scene, (*map)->frame().direction());
+  const std::vector<uint8_t> truths = point_truth(truth, receivers);
+
+  // Raw first: the reference the others are compared with.
+  std::vector<store::Method> methods = meta.methods;
+  std::stable_partition(methods.begin(), methods.end(),
+                        [](store::Method m) { return store::method_properties(m).reference; });
+  std::vector<uint8_t> raw_answers;
+  nlohmann::json out = {{"receivers", receivers.size()}, {"seed", flags.seed},
+                        {"contract", receiver_contract_name(meta.receivers)}, {"methods", nlohmann::json::object()}};
+  for (store::Method method : methods) {
+    const bool is_raw = store::method_properties(method).reference;
+    auto acc = point_accuracy(**map, method, receivers, truths, is_raw ? std::span<const uint8_t>{} : raw_answers,
+                              is_raw ? &raw_answers : nullptr);
+    if (!acc) {
+      spdlog::error("{}: {}", store::method_name(method), acc.error().message);
+      return exit_code_for(acc.error());
+    }
+    out["methods"][store::method_name(method)] = {
+        {"false_lit", acc->false_lit},           {"false_shadowed", acc->false_shadowed},
+        {"truth_lit", acc->truth_lit},           {"differs_from_raw", acc->differs_from_raw},
+        {"worse_than_raw", acc->worse_than_raw}, {"outside_map", acc->outside_map}};
+    if (!flags.json)
+      std::printf("%-6s false lit %6llu  false shadowed %6llu  (of %zu receivers; differs from raw %llu)\n",
+                  store::method_name(method), static_cast<unsigned long long>(acc->false_lit),
+                  static_cast<unsigned long long>(acc->false_shadowed), receivers.size(),
+                  static_cast<unsigned long long>(acc->differs_from_raw));
+  }
+  if (flags.json) std::cout << out.dump(1) << "\n";
+  return kOk;
+}
+
+}  // namespace
+
+void add_accuracy_command(CLI::App& app, int& exit_code) {
+  auto flags = std::make_shared<AccuracyFlags>();
+  CLI::App* cmd = app.add_subcommand(
+      "accuracy", "False-lit / false-shadowed answers of every stored method against Embree ground truth");
+  cmd->add_option("store", flags->store, "Store directory")->required();
+  cmd->add_option("scene", flags->scene, "The scene file the store was built from")->required();
+  cmd->add_option("--receivers,-n", flags->receivers, "Receivers sampled uniformly on the surfaces")
+      ->capture_default_str();
+  cmd->add_option("--seed", flags->seed, "Receiver sampling seed (the bench's default)")->capture_default_str();
+  cmd->add_flag("--json", flags->json, "Print JSON");
+  cmd->callback([flags, &exit_code] { exit_code = run(*flags); });
+}
+
+}  // namespace shadowtiles::cli
