@@ -17,6 +17,7 @@ failed=0
 # name | binary | gtest filter | what is tried | fault / load | data lost when it passes
 checks=(
   "SIGKILL during build, resume|test_faults|Faults.SigkillAtTwentyRandomMomentsThenResumeStoresExactlyTheCleanBuild|terragen 1024² in 64² tiles, raw+mh+mmh+dagmh, 2 threads|20 SIGKILLs at uniform random moments in [0, clean/2] of each run (scene load, ray casting, encoding, commits, merge); each killed store opened|none: tiles, top, preview, tileinfo byte-identical to an uninterrupted build"
+  "SIGKILL during merge, resume|test_shard_merge|ShardMerge.SigkillAtTwentyRandomMomentsThenResumeEqualsTheOneMachineBuild|4 shard stores of fzk_haus 4096² (512² tiles, raw+mh+mmh+dagmh) merged in 1 MiB transactions|20 SIGKILLs at uniform random moments in [0, clean] of fresh and resumed merges; each killed store opened|none: the resumed merge equals the one-machine build (every blob, info, progress record and top tree byte-identical)"
   "Disk full|test_faults|Faults.DiskFullBuildExitsOneAndResumesWhenSpaceIsBack|the same build into a tmpfs of half the store's size (private mount namespace)|ENOSPC / short write mid-build; then the tmpfs is grown and the same command rerun|none: exit 1 with 'the disk is full', inspect reads the incomplete store, the resume is byte-identical"
   "Swap of builds under load|test_server|ServerReload.SwapUnderLoadLosesNoRequestAndNeverMixesBuilds|4 keep-alive clients sending 512-point binary batches without pause|store symlink repointed (ln -sfn) + reload (what SIGHUP does) mid-load|0 requests lost, 0 batches mixing builds (X-Shadowtiles-Build names the answering build)"
   "Slow clients|test_server_limits|ServerLimitsTest.SlowClientsNeverStarveQueries|/healthz and point queries|max_connections - 2 connections that send a partial request and stall|none: queries answer well inside the read timeout"
@@ -26,7 +27,8 @@ checks=(
   "Bit flips in blobs and payloads|test_blob|Blob.EveryHeaderBitFlipIsAnError:Blob.PayloadBitFlipsAreErrors|every header bit, payload bits of real-size blobs|single bit flips|every flip detected (checksum)"
   "Bit flips in decoded payloads|test_mh_robustness|MhRobustness.*|every single bit of MH/MMH payloads, random multi-byte corruption|flips past the checksum (the decoder alone)|refused or answers in bounds, never a crash"
   "Raw tile header|test_raw_tile|RawTile.*|magic, version, reserved bits, size, NaN/inf texels|corrupt raw payloads|every one refused (corrupt_data / unsupported)"
-  "Malformed scenes|test_scene_loader|SceneLoaderErrors.*|truncated PLY at every length, huge counts, control bytes in headers, hostile glTF|malformed files|a clear invalid_input error, no hang"
+  "Malformed scenes|test_scene_loader|SceneLoaderErrors.*|truncated PLY at every length, hostile glTF, bad Terragen files|malformed files|a clear invalid_input error, no hang"
+  "Hostile PLY/OFF files|test_mesh_file_prechecks|MeshFilePrechecks.*|element and list counts beyond the file (binary and ascii), short bodies, OFF indices out of range, control bytes and unknown lines in headers (each found by fuzz_scene_loader or the truncation tests)|files that made assimp 5.2 hang, allocate 21-32 GB or read out of bounds|none: refused before assimp parses them, with the rule that failed"
 )
 
 run_check() {
@@ -42,7 +44,7 @@ for check in "${checks[@]}"; do
   if run_check "$name" "$binary" "$filter"; then result=pass; else result=FAIL; failed=1; lost="see the log"; fi
   log="$work/$binary.$(echo "$name" | tr -c 'a-zA-Z0-9' _).log"
   tests=$(grep -c '^\[       OK \]' "$log" || true)
-  figures=$(grep -E '^(SIGKILL|swap under load|slow clients held):' "$log" | tr '\n' ' ' | sed 's/ *$//')
+  figures=$(grep -E '^(SIGKILL|merge SIGKILL|swap under load|slow clients held):' "$log" | tr '\n' ' ' | sed 's/ *$//')
   rows+=("| $name | $tried | $fault | $result ($tests tests, $(( $(date +%s) - start )) s) | ${figures:--} | $lost |")
   echo "$name: $result"
 done

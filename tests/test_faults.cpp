@@ -79,36 +79,14 @@ std::string join(const std::vector<std::string>& args) {
   return s;
 }
 
-// Starts the CLI with output appended to `log`.
-pid_t spawn(const std::vector<std::string>& args, const std::filesystem::path& log) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    if (fd >= 0) {
-      ::dup2(fd, 1);
-      ::dup2(fd, 2);
-    }
-    std::vector<char*> argv;
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  return pid;
-}
-
-int wait_status(pid_t pid, int options = 0) {
-  int status = 0;
-  const pid_t r = ::waitpid(pid, &status, options);
-  if (r == 0) return -1;  // still running (WNOHANG)
-  return status;
-}
+using testing::spawn_process;
+using testing::wait_status;
 
 TEST(Faults, SigkillAtTwentyRandomMomentsThenResumeStoresExactlyTheCleanBuild) {
   TempDir dir;
   const auto log = dir.path() / "build.log";
   const auto start = Clock::now();
-  ASSERT_EQ(wait_status(spawn(build_args(dir.path() / "clean"), log)), 0) << "clean build failed, see " << log;
+  ASSERT_EQ(wait_status(spawn_process(build_args(dir.path() / "clean"), log)), 0) << "clean build failed, see " << log;
   const double clean_s = std::chrono::duration<double>(Clock::now() - start).count();
 
   // Kill moments uniform in [0, clean/2] after each start, so kills land in every phase (scene load,
@@ -121,7 +99,7 @@ TEST(Faults, SigkillAtTwentyRandomMomentsThenResumeStoresExactlyTheCleanBuild) {
   auto round_dir = [&] { return dir.path() / ("killed-" + std::to_string(round)); };
   while (kills < 20 && runs < 200) {
     ++runs;
-    const pid_t pid = spawn(build_args(round_dir()), log);
+    const pid_t pid = spawn_process(build_args(round_dir()), log);
     std::this_thread::sleep_for(std::chrono::duration<double>(moment(rng)));
     if (int status = wait_status(pid, WNOHANG); status != -1) {
       ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "a resumed build failed: see " << log;
@@ -151,7 +129,7 @@ TEST(Faults, SigkillAtTwentyRandomMomentsThenResumeStoresExactlyTheCleanBuild) {
   EXPECT_EQ(kills, 20);
   EXPECT_GE(mid_build_kills, 5) << "kills must also land between tile commits";
   // The last round resumes to the end.
-  ASSERT_EQ(wait_status(spawn(build_args(round_dir()), log)), 0) << "see " << log;
+  ASSERT_EQ(wait_status(spawn_process(build_args(round_dir()), log)), 0) << "see " << log;
   expect_same_records(round_dir(), dir.path() / "clean");
   std::printf("SIGKILL: %d kills (%d between tile commits) over %d runs, %d rounds completed and checked before "
               "the final resume, clean build %.2f s\n", kills, mid_build_kills, runs, completed_rounds, clean_s);
@@ -159,7 +137,7 @@ TEST(Faults, SigkillAtTwentyRandomMomentsThenResumeStoresExactlyTheCleanBuild) {
 
 TEST(Faults, DiskFullBuildExitsOneAndResumesWhenSpaceIsBack) {
   TempDir dir;
-  ASSERT_EQ(wait_status(spawn(build_args(dir.path() / "clean"), dir.path() / "clean.log")), 0);
+  ASSERT_EQ(wait_status(spawn_process(build_args(dir.path() / "clean"), dir.path() / "clean.log")), 0);
   const uint64_t store_bytes = std::filesystem::file_size(dir.path() / "clean" / "data.mdb");
   const uint64_t small_kib = store_bytes / 2 / 1024;  // room for about half the store
 

@@ -1,10 +1,17 @@
 // Sharded builds and `shadowtiles merge` (issue 16): the merge of N shard stores equals the
 // one-machine build of the same config (every blob, info record, progress record and top tree
 // byte-identical, meta equal except timings), mismatched, missing or overlapping shards are refused
-// naming the shard, and both the shard builds and the merge resume after a kill.
+// naming the shard, and both the shard builds and the merge resume after a kill (the merge after
+// SIGKILLs at 20 random moments, issue 18).
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <chrono>
 #include <cstring>
+#include <random>
+#include <thread>
 #include <map>
 #include <string>
 #include <vector>
@@ -173,6 +180,62 @@ TEST_F(ShardMerge, KilledMergeResumes) {
   ASSERT_EQ(run(cli() + " merge " + shards() + "--out " + out.string() + " --json", &log), 0) << log;
   EXPECT_NE(log.find("\"resumed\": true"), std::string::npos) << log;
   expect_same_build(out, dir_->path() / "single");
+}
+
+// Like the build's SIGKILL test (tests/test_faults.cpp): kills at random moments of fresh and resumed
+// merges, small transactions so kills land between commits; every completed round equals the
+// one-machine build, and the last one is resumed to the end.
+TEST_F(ShardMerge, SigkillAtTwentyRandomMomentsThenResumeEqualsTheOneMachineBuild) {
+  using Clock = std::chrono::steady_clock;
+  const auto log = dir_->path() / "merge-kills.log";
+  auto merge_args = [&](const std::filesystem::path& out) {
+    std::vector<std::string> args{cli(), "merge"};
+    for (int i : {0, 1, 2, 3}) args.push_back(shard(i).string());
+    for (const char* a : {"--transaction-mib", "1", "--out"}) args.push_back(a);
+    args.push_back(out.string());
+    return args;
+  };
+  const auto start = Clock::now();
+  ASSERT_EQ(testing::wait_status(testing::spawn_process(merge_args(dir_->path() / "merge-clean"), log)), 0)
+      << "see " << log;
+  const double clean_s = std::chrono::duration<double>(Clock::now() - start).count();
+  const size_t clean_tiles = read_all(dir_->path() / "single", store::Database::tiles).size();
+  std::mt19937 rng(16);
+  std::uniform_real_distribution<double> moment(0.0, clean_s);
+  int kills = 0, round = 0, completed_rounds = 0, runs = 0, mid_merge_kills = 0;
+  auto round_dir = [&] { return dir_->path() / ("merge-killed-" + std::to_string(round)); };
+  while (kills < 20 && runs < 200) {
+    ++runs;
+    const pid_t pid = testing::spawn_process(merge_args(round_dir()), log);
+    std::this_thread::sleep_for(std::chrono::duration<double>(moment(rng)));
+    int status = testing::wait_status(pid, WNOHANG);
+    if (status == -1) {
+      ASSERT_EQ(::kill(pid, SIGKILL), 0);
+      status = testing::wait_status(pid);
+    }
+    if (WIFEXITED(status)) {  // finished before the kill: the round is checked and the next starts anew
+      ASSERT_EQ(WEXITSTATUS(status), 0) << "a merge failed: see " << log;
+      expect_same_build(round_dir(), dir_->path() / "single");
+      ++completed_rounds;
+      ++round;
+      continue;
+    }
+    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+    ++kills;
+    // The killed store opens and holds only whole transactions.
+    if (std::filesystem::exists(round_dir() / "data.mdb")) {
+      const size_t committed = read_all(round_dir(), store::Database::tiles).size();
+      EXPECT_LE(committed, clean_tiles);
+      if (committed > 0 && committed < clean_tiles) ++mid_merge_kills;
+    }
+  }
+  EXPECT_EQ(kills, 20);
+  EXPECT_GE(mid_merge_kills, 3) << "kills must also land between the merge's commits";
+  ASSERT_EQ(testing::wait_status(testing::spawn_process(merge_args(round_dir()), log)), 0) << "see " << log;
+  expect_same_build(round_dir(), dir_->path() / "single");
+  std::printf("merge SIGKILL: %d kills (%d between commits) over %d runs, %d rounds completed and checked, clean "
+              "merge %.2f s, %zu tiles\n",
+              kills, mid_merge_kills, runs, completed_rounds, clean_s, clean_tiles);
 }
 
 TEST_F(ShardMerge, MissingDuplicateOrForeignShardsAreRefusedNamingTheShard) {

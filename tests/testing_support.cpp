@@ -1,5 +1,6 @@
 #include "tests/testing_support.hpp"
 
+#include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -21,6 +22,30 @@ std::filesystem::path assimp_model(const std::string& relative) {
 }
 
 std::filesystem::path cli_path() { return SHADOWTILES_CLI; }
+
+pid_t spawn_process(const std::vector<std::string>& args, const std::filesystem::path& log) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    if (fd >= 0) {
+      ::dup2(fd, 1);
+      ::dup2(fd, 2);
+    }
+    std::vector<char*> argv;
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+int wait_status(pid_t pid, int options) {
+  int status = 0;
+  const pid_t r = ::waitpid(pid, &status, options);
+  if (r == 0) return -1;  // still running (WNOHANG)
+  return status;
+}
 
 void write_file(const std::filesystem::path& path, const std::string& bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);

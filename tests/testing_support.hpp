@@ -1,8 +1,11 @@
 // Helpers shared by the test executables: where the shared scenes and the CLI are, temp dirs.
 #pragma once
 
+#include <sys/types.h>
+
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace shadowtiles::testing {
 
@@ -27,6 +30,10 @@ class TempDir {
 // Whole-file bytes, for fixtures: write (truncating) and read; a missing file reads as "".
 void write_file(const std::filesystem::path& path, const std::string& bytes);
 std::string read_file(const std::filesystem::path& path);
+// Starts args[0] with args (no shell), stdout and stderr appended to `log`; returns its pid.
+pid_t spawn_process(const std::vector<std::string>& args, const std::filesystem::path& log);
+// waitpid's status; with WNOHANG, -1 while the process still runs.
+int wait_status(pid_t pid, int options = 0);
 // Runs a shell command, returns its exit status (as from waitpid, decoded) and captures stdout+stderr.
 int run_command(const std::string& command, std::string* output = nullptr);
 
