@@ -68,6 +68,7 @@ int run(const ServeFlags& flags) {
         auto reloaded = running->reload();
         if (!reloaded) spdlog::warn("SIGHUP: keeping the current build: {}", reloaded.error().message);
         else if (!*reloaded) spdlog::info("SIGHUP: the store path still holds the served build");
+        else spdlog::info("SIGHUP: reloaded, now serving the build the store path holds");
       });
 
   if (!server::keep_batch_buffers_resident()) spdlog::debug("allocator tuning not available: batch buffers are mapped per request");

@@ -1,12 +1,19 @@
 // The `shadowtiles serve` process and the server's lifecycle: strict config parsing and overrides,
 // the CLI's config flags and SIGTERM drain, the config's store key, and reloads that swap builds
-// (also under load, never mixing two builds in one answer).
+// (also under load, in-process and by SIGHUP to the real process, never mixing two builds in one answer).
 #include <gtest/gtest.h>
 
 #include "tests/server_test_support.hpp"
 
 namespace shadowtiles {
 namespace {
+
+// ln -sfn: a new link renamed over the old one, so readers see one target or the other.
+void repoint(const std::filesystem::path& link, const std::filesystem::path& target) {
+  const auto next = link.string() + ".next";
+  std::filesystem::create_directory_symlink(target, next);
+  std::filesystem::rename(next, link);
+}
 
 using namespace server_testing;
 
@@ -129,11 +136,6 @@ TEST(ServerReload, SwapsToTheBuildTheStorePathPointsAt) {
 
   const auto current = dir.path() / "current";
   std::filesystem::create_directory_symlink(a, current);
-  auto repoint = [&](const std::filesystem::path& target) {  // ln -sfn: rename a new link over the old
-    const auto next = dir.path() / "current.next";
-    std::filesystem::create_directory_symlink(target, next);
-    std::filesystem::rename(next, current);
-  };
   auto config = test_config();
   config.reload_poll_s = 1;
   RunningServer running(config, &current);
@@ -155,7 +157,7 @@ TEST(ServerReload, SwapsToTheBuildTheStorePathPointsAt) {
   ASSERT_TRUE(unchanged.ok()) << unchanged.error().message;
   EXPECT_FALSE(*unchanged);
 
-  repoint(b);  // picked up by the poller, no SIGHUP needed
+  repoint(current, b);  // picked up by the poller, no SIGHUP needed
   std::string id_b = id_a;
   for (int i = 0; i < 100 && id_b == id_a; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
@@ -187,52 +189,55 @@ TEST(ServerReload, SwapsToTheBuildTheStorePathPointsAt) {
 
   const auto empty = dir.path() / "empty";
   std::filesystem::create_directory(empty);
-  repoint(empty);
+  repoint(current, empty);
   EXPECT_FALSE(running.server().reload().ok()) << "no build there";
   EXPECT_EQ(served_build(), id_b) << "the current build stays served";
 }
 
 
-// A swap under load (issue 18): clients keep sending binary batches while the store path is
-// repointed and the server reloads (what SIGHUP does). No request may fail, every answer names the
-// build it came from (X-Shadowtiles-Build), and every batch equals that one build's answers in
-// full: never a mix of the two builds within one batch.
-TEST(ServerReload, SwapUnderLoadLosesNoRequestAndNeverMixesBuilds) {
-  TempDir dir;
-  const auto a = dir.path() / "a.store", b = dir.path() / "b.store";
-  ASSERT_TRUE(run_build(bunny_config(a, {store::Method::raw})).ok());
-  BuildConfig config_b = bunny_config(b, {store::Method::raw});
+// Two bunny stores lit from different suns, and each one's binary answer to the same batch.
+struct TwoBuilds {
+  std::filesystem::path a, b;
+  std::vector<Vec3> points;
+  std::map<std::string, std::string> expected;  // build id -> the binary answer of the whole batch
+};
+
+void make_two_builds(const std::filesystem::path& dir, TwoBuilds* builds) {
+  builds->a = dir / "a.store";
+  builds->b = dir / "b.store";
+  ASSERT_TRUE(run_build(bunny_config(builds->a, {store::Method::raw})).ok());
+  BuildConfig config_b = bunny_config(builds->b, {store::Method::raw});
   config_b.light_direction = *light_direction_from_sun(200, 60, UpAxis::y);
   ASSERT_TRUE(run_build(config_b).ok());
   LoadOptions load;
   load.up = UpAxis::y;
   auto scene = load_scene(testing::shared_scene(kBunny), load);
   ASSERT_TRUE(scene.ok());
-  std::vector<Vec3> points;
   for (const Receiver& r : sample_receivers(*scene, 512, 11))
-    points.push_back({double(float(r.position[0])), double(float(r.position[1])), double(float(r.position[2]))});
-  std::map<std::string, std::string> expected;  // build id -> the binary answer of the whole batch
-  for (const auto& dir_of_build : {a, b}) {
+    builds->points.push_back({double(float(r.position[0])), double(float(r.position[1])), double(float(r.position[2]))});
+  for (const auto& dir_of_build : {builds->a, builds->b}) {
     auto map = ShadowMap::open(dir_of_build);
     ASSERT_TRUE(map.ok());
     std::string body;
-    for (const Vec3& p : points) {
+    for (const Vec3& p : builds->points) {
       auto answer = (*map)->query(p, store::Method::raw);
       ASSERT_TRUE(answer.ok());
       const float lit = answer->lit ? 1.0f : 0.0f;
       body.append(reinterpret_cast<const char*>(&lit), 4);
     }
-    expected[(*map)->meta().config_hash] = body;
+    builds->expected[(*map)->meta().config_hash] = body;
   }
-  ASSERT_EQ(expected.size(), 2u);
-  ASSERT_NE(expected.begin()->second, expected.rbegin()->second) << "the two builds must answer differently";
+  ASSERT_EQ(builds->expected.size(), 2u);
+  ASSERT_NE(builds->expected.begin()->second, builds->expected.rbegin()->second)
+      << "the two builds must answer differently";
+}
 
-  const auto current = dir.path() / "current";
-  std::filesystem::create_directory_symlink(a, current);
-  auto config = test_config();
-  config.reload_poll_s = 0;  // only the explicit reload below swaps
-  RunningServer running(config, &current);
-  const std::string body = encode_points(points);
+// 4 keep-alive clients send the batch without pause to the server on `port` while `swap` repoints
+// and reloads mid-load. No request may fail, every answer names its build (X-Shadowtiles-Build), and
+// every batch equals that one build's answer in full: never a mix within one batch.
+void expect_swap_under_load_loses_nothing(int port, const TwoBuilds& builds, const std::function<void()>& swap,
+                                          const char* how) {
+  const std::string body = encode_points(builds.points);
   std::atomic<bool> stop{false};
   std::mutex mutex;
   std::map<std::string, int> answers_by_build;
@@ -240,7 +245,9 @@ TEST(ServerReload, SwapUnderLoadLosesNoRequestAndNeverMixesBuilds) {
   std::vector<std::thread> clients;
   for (int c = 0; c < 4; ++c)
     clients.emplace_back([&] {
-      auto cli = running.client();
+      httplib::Client cli("127.0.0.1", port);
+      cli.set_keep_alive(true);
+      cli.set_read_timeout(20, 0);
       while (!stop.load()) {
         auto res = cli.Post("/v1/shadow?method=raw", body, "application/octet-stream");
         std::lock_guard lock(mutex);
@@ -249,18 +256,21 @@ TEST(ServerReload, SwapUnderLoadLosesNoRequestAndNeverMixesBuilds) {
           continue;
         }
         const std::string build = res->get_header_value("X-Shadowtiles-Build");
-        auto it = expected.find(build);
-        if (it == expected.end() || it->second != res->body) ++mixed;
+        auto it = builds.expected.find(build);
+        if (it == builds.expected.end() || it->second != res->body) ++mixed;
         ++answers_by_build[build];
       }
     });
   std::this_thread::sleep_for(std::chrono::milliseconds(400));
-  const auto next = dir.path() / "current.next";  // ln -sfn: rename a new link over the old
-  std::filesystem::create_directory_symlink(b, next);
-  std::filesystem::rename(next, current);
-  auto swapped = running.server().reload();
-  ASSERT_TRUE(swapped.ok()) << swapped.error().message;
-  EXPECT_TRUE(*swapped);
+  swap();
+  // Until the new build answers (a signal is handled asynchronously), then a while longer.
+  for (int i = 0; i < 100; ++i) {
+    {
+      std::lock_guard lock(mutex);
+      if (answers_by_build.size() == 2) break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
   std::this_thread::sleep_for(std::chrono::milliseconds(400));
   stop = true;
   for (auto& t : clients) t.join();
@@ -272,11 +282,56 @@ TEST(ServerReload, SwapUnderLoadLosesNoRequestAndNeverMixesBuilds) {
     EXPECT_GT(n, 0) << build;
     total += n;
   }
-  std::printf("swap under load: %d batches of %zu points from 4 clients, %d from the old build, %d from the new, "
-              "%d failed, %d mixed\n", total, points.size(), answers_by_build.begin()->second,
-              answers_by_build.rbegin()->second, failed, mixed);
+  std::printf("swap under load (%s): %d batches of %zu points from 4 clients, %d failed, %d mixed\n", how, total,
+              builds.points.size(), failed, mixed);
 }
 
+// A swap under load (issue 18), in-process: the store path is repointed and Server::reload runs
+// (what SIGHUP does in `shadowtiles serve`).
+TEST(ServerReload, SwapUnderLoadLosesNoRequestAndNeverMixesBuilds) {
+  TempDir dir;
+  TwoBuilds builds;
+  make_two_builds(dir.path(), &builds);
+  if (HasFatalFailure()) return;
+  const auto current = dir.path() / "current";
+  std::filesystem::create_directory_symlink(builds.a, current);
+  auto config = test_config();
+  config.reload_poll_s = 0;  // only the explicit reload below swaps
+  RunningServer running(config, &current);
+  expect_swap_under_load_loses_nothing(running.port(), builds, [&] {
+    repoint(current, builds.b);
+    auto swapped = running.server().reload();
+    ASSERT_TRUE(swapped.ok()) << swapped.error().message;
+    EXPECT_TRUE(*swapped);
+  }, "Server::reload");
+}
+
+// The same with the real process and the real signal: `shadowtiles serve --config` (reload on SIGHUP
+// only), the link repointed with rename, then `kill -HUP`.
+TEST(ServerReload, SighupToTheServeProcessSwapsUnderLoadLosingNothing) {
+  TempDir dir;
+  TwoBuilds builds;
+  make_two_builds(dir.path(), &builds);
+  if (HasFatalFailure()) return;
+  const auto current = dir.path() / "current";
+  std::filesystem::create_directory_symlink(builds.a, current);
+  std::ofstream(dir.path() / "serve.json")
+      << json{{"store", current.string()}, {"port", 0}, {"reload_poll_s", 0}, {"keep_alive_timeout_s", 1}}.dump();
+  ServeChild child = start_serve_child("--config " + (dir.path() / "serve.json").string());
+  ASSERT_NE(child.out, nullptr);
+  ASSERT_GT(child.pid, 0);
+  ASSERT_GT(child.port, 0);
+  expect_swap_under_load_loses_nothing(child.port, builds, [&] {
+    repoint(current, builds.b);
+    ASSERT_EQ(::kill(child.pid, SIGHUP), 0);
+  }, "SIGHUP to shadowtiles serve");
+  ASSERT_EQ(::kill(child.pid, SIGTERM), 0);
+  std::string rest;
+  const int status = finish_serve_child(child, &rest);
+  ASSERT_TRUE(WIFEXITED(status)) << rest;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << rest;
+  EXPECT_NE(rest.find("SIGHUP: reloaded"), std::string::npos) << "the reload is logged: " << rest;
+}
 
 }  // namespace
 }  // namespace shadowtiles
