@@ -91,13 +91,15 @@ TEST(Faults, SigkillAtTwentyRandomMomentsThenResumeStoresExactlyTheCleanBuild) {
 
   // Kill moments uniform in [0, clean/2] after each start, so kills land in every phase (scene load,
   // ray casting, encoding, commits, the top-level merge) of fresh and resumed runs. A run that
-  // completes ends its round: the store is checked and the next round starts from nothing.
+  // completes ends its round: the store is checked and the next round starts from nothing. Runs go on
+  // past 20 kills while fewer than 5 landed between tile commits (on a loaded machine the scene load
+  // takes a larger share of each run).
   std::mt19937 rng(18);
   std::uniform_real_distribution<double> moment(0.0, clean_s / 2);
   const size_t clean_tiles = records(dir.path() / "clean", store::Database::tiles).size();
   int kills = 0, round = 0, completed_rounds = 0, runs = 0, mid_build_kills = 0;
   auto round_dir = [&] { return dir.path() / ("killed-" + std::to_string(round)); };
-  while (kills < 20 && runs < 200) {
+  while ((kills < 20 || mid_build_kills < 5) && runs < 200) {
     ++runs;
     const pid_t pid = spawn_process(build_args(round_dir()), log);
     std::this_thread::sleep_for(std::chrono::duration<double>(moment(rng)));
@@ -126,7 +128,7 @@ TEST(Faults, SigkillAtTwentyRandomMomentsThenResumeStoresExactlyTheCleanBuild) {
       if (committed > 0 && committed < clean_tiles) ++mid_build_kills;
     }
   }
-  EXPECT_EQ(kills, 20);
+  EXPECT_GE(kills, 20);
   EXPECT_GE(mid_build_kills, 5) << "kills must also land between tile commits";
   // The last round resumes to the end.
   ASSERT_EQ(wait_status(spawn_process(build_args(round_dir()), log)), 0) << "see " << log;

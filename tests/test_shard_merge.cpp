@@ -184,7 +184,8 @@ TEST_F(ShardMerge, KilledMergeResumes) {
 
 // Like the build's SIGKILL test (tests/test_faults.cpp): kills at random moments of fresh and resumed
 // merges, small transactions so kills land between commits; every completed round equals the
-// one-machine build, and the last one is resumed to the end.
+// one-machine build, and the last one is resumed to the end. Runs go on past 20 kills while fewer than
+// 3 landed between commits (process start-up takes a larger share on a loaded machine).
 TEST_F(ShardMerge, SigkillAtTwentyRandomMomentsThenResumeEqualsTheOneMachineBuild) {
   using Clock = std::chrono::steady_clock;
   const auto log = dir_->path() / "merge-kills.log";
@@ -204,7 +205,7 @@ TEST_F(ShardMerge, SigkillAtTwentyRandomMomentsThenResumeEqualsTheOneMachineBuil
   std::uniform_real_distribution<double> moment(0.0, clean_s);
   int kills = 0, round = 0, completed_rounds = 0, runs = 0, mid_merge_kills = 0;
   auto round_dir = [&] { return dir_->path() / ("merge-killed-" + std::to_string(round)); };
-  while (kills < 20 && runs < 200) {
+  while ((kills < 20 || mid_merge_kills < 3) && runs < 200) {
     ++runs;
     const pid_t pid = testing::spawn_process(merge_args(round_dir()), log);
     std::this_thread::sleep_for(std::chrono::duration<double>(moment(rng)));
@@ -229,7 +230,7 @@ TEST_F(ShardMerge, SigkillAtTwentyRandomMomentsThenResumeEqualsTheOneMachineBuil
       if (committed > 0 && committed < clean_tiles) ++mid_merge_kills;
     }
   }
-  EXPECT_EQ(kills, 20);
+  EXPECT_GE(kills, 20);
   EXPECT_GE(mid_merge_kills, 3) << "kills must also land between the merge's commits";
   ASSERT_EQ(testing::wait_status(testing::spawn_process(merge_args(round_dir()), log)), 0) << "see " << log;
   expect_same_build(round_dir(), dir_->path() / "single");
