@@ -171,12 +171,15 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
                             const TexelWindow& window, std::span<float> cap, ReceiverCapCounts* counts) {
   const uint32_t size = window.size;
   const double u0 = window.u0, v0 = window.v0;
-  // The texels the original clipping visited: the bounding box floored to texels, clamped.
+  // The texels whose closed squares the bounding box touches, clamped. Closed: a box starting exactly
+  // on a texel border (a heightfield's grid line on a tile border) touches the texel left of (below)
+  // that border too, so the box is floored less one texel, and a box starting on the window's far
+  // border still reaches its last column (row).
   const double lo_u = std::min({a.u, b.u, c.u}) - u0, hi_u = std::max({a.u, b.u, c.u}) - u0;
   const double lo_v = std::min({a.v, b.v, c.v}) - v0, hi_v = std::max({a.v, b.v, c.v}) - v0;
-  if (hi_u < 0 || hi_v < 0 || lo_u >= size || lo_v >= size) return;
-  const uint32_t i0 = uint32_t(std::max(0.0, std::floor(lo_u))), i1 = uint32_t(std::min(size - 1.0, std::floor(hi_u)));
-  const uint32_t j0 = uint32_t(std::max(0.0, std::floor(lo_v))), j1 = uint32_t(std::min(size - 1.0, std::floor(hi_v)));
+  if (hi_u < 0 || hi_v < 0 || lo_u > size || lo_v > size) return;
+  const uint32_t i0 = uint32_t(std::max(0.0, std::floor(lo_u) - 1)), i1 = uint32_t(std::min(size - 1.0, std::floor(hi_u)));
+  const uint32_t j0 = uint32_t(std::max(0.0, std::floor(lo_v) - 1)), j1 = uint32_t(std::min(size - 1.0, std::floor(hi_v)));
 
   InteriorPlane plane;
   const bool has_interior = make_interior_plane(a, b, c, plane);

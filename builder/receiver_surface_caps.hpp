@@ -38,7 +38,8 @@ struct TexelWindow {
 };
 
 // Lowers cap[j * size + i] to the shallowest depth of triangle (a, b, c) within texel (i, j)'s square,
-// for every texel of the window the triangle touches (its bounding box floored to texels, clamped).
+// for every texel of the window whose closed square the triangle touches (a triangle starting exactly on
+// a texel border, the window's own included, touches the texel before that border too).
 void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, const LightSpacePoint& c,
                             const TexelWindow& window, std::span<float> cap, ReceiverCapCounts* counts = nullptr);
 

@@ -48,9 +48,10 @@ inline void reference_lower_caps(const LightSpacePoint& a, const LightSpacePoint
   std::vector<ReferenceClipVertex> polygon, scratch;
   const double lo_u = std::min({a.u, b.u, c.u}) - u0, hi_u = std::max({a.u, b.u, c.u}) - u0;
   const double lo_v = std::min({a.v, b.v, c.v}) - v0, hi_v = std::max({a.v, b.v, c.v}) - v0;
-  if (hi_u < 0 || hi_v < 0 || lo_u >= size || lo_v >= size) return;
-  const uint32_t i0 = uint32_t(std::max(0.0, std::floor(lo_u))), i1 = uint32_t(std::min(size - 1.0, std::floor(hi_u)));
-  const uint32_t j0 = uint32_t(std::max(0.0, std::floor(lo_v))), j1 = uint32_t(std::min(size - 1.0, std::floor(hi_v)));
+  // Closed squares (issue #14): a box starting exactly on a texel border also touches the texel before it.
+  if (hi_u < 0 || hi_v < 0 || lo_u > size || lo_v > size) return;
+  const uint32_t i0 = uint32_t(std::max(0.0, std::floor(lo_u) - 1)), i1 = uint32_t(std::min(size - 1.0, std::floor(hi_u)));
+  const uint32_t j0 = uint32_t(std::max(0.0, std::floor(lo_v) - 1)), j1 = uint32_t(std::min(size - 1.0, std::floor(hi_v)));
   for (uint32_t j = j0; j <= j1; ++j)
     for (uint32_t i = i0; i <= i1; ++i) {
       const double su = u0 + i, sv = v0 + j;

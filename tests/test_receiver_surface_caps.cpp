@@ -142,6 +142,30 @@ TEST(ReceiverSurfaceCaps, VerticesOnTexelBordersMatchTheClipping) {
   });
 }
 
+// Squares are closed (docs/receiver-contracts.md): a triangle whose leftmost vertex lies exactly on a
+// tile's border caps the left tile's last column at that vertex. RealisticTerrain at 4096^2, sun
+// 135,45, tiles of 1024: heightfield triangle 70378 (facing away from the light) starts on u = 2048,
+// and tile 1,2's texel 1023,15 was left uncapped (upper 0.947 where the reference caps it to its lower).
+TEST(ReceiverSurfaceCaps, TriangleStartingOnATileBorderCapsTheTexelBeforeIt) {
+  const LightSpacePoint a{2063.9680638722552, 2062.0023298418832, 0.56409044442253675};
+  const LightSpacePoint b{2055.9840319361278, 2063.0706339061371, 0.5601892666215702};
+  const LightSpacePoint c{2048, 2063.5059144695028, 0.56361584722641489};  // on the tile border
+  const float inf = std::numeric_limits<float>::infinity();
+  for (const TexelWindow window : {TexelWindow{1024, 2048, 1024}, TexelWindow{2048 - 32, 2048, 32}}) {
+    std::vector<float> cap(size_t(window.size) * window.size, inf);
+    lower_caps_by_triangle(a, b, c, window, cap);
+    const size_t last_column = window.size - 1, row = size_t(2063 - window.v0);
+    EXPECT_EQ(cap[row * window.size + last_column], float(c.depth)) << "window at u " << window.u0;
+    EXPECT_EQ(cap[(row - 1) * window.size + last_column], inf) << "the row below does not touch it";
+  }
+  // The same on the v axis and inside a window: a vertex on a texel's lower border caps the texel below.
+  const LightSpacePoint p{40, 30, 0.25}, q{45, 36, 0.5}, r{38, 37, 0.75};  // p.v = 30 is the lowest v
+  std::vector<float> cap(size_t(64) * 64, inf);
+  lower_caps_by_triangle(p, q, r, TexelWindow{0, 0, 64}, cap);
+  EXPECT_EQ(cap[size_t(29) * 64 + 40], 0.25f) << "texel 40,29 (square v in [29, 30]) holds vertex p";
+  EXPECT_EQ(cap[size_t(29) * 64 + 39], 0.25f) << "texel 39,29 touches p at its corner";
+}
+
 TEST(ReceiverSurfaceCaps, TrianglesLargerThanOrPartlyOutsideTheWindowMatchTheClipping) {
   Draw draw(4);
   ReceiverCapCounts counts;
