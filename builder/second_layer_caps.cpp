@@ -79,14 +79,14 @@ void clip(const Polygon& in, Polygon& out, F value) {
   }
 }
 
-// The region of `back` lying behind `front` by at least `gap` and, when `most` is finite, by at most
-// `most` (widened as the header says), into `region`; false when empty.
-bool region_behind(const Prepared& back, const Prepared& front, double gap, double most, Polygon& region) {
+// The part of `back` inside `front`'s footprint (its edges widened as the header says), into
+// `covered`; false when empty.
+bool covered_by(const Prepared& back, const Prepared& front, Polygon& covered) {
   Polygon scratch;
-  Polygon* current = &region;
+  Polygon* current = &covered;
   Polygon* next = &scratch;
-  region.count = 3;
-  for (int k = 0; k < 3; ++k) region.at[k] = back.p[k];
+  covered.count = 3;
+  for (int k = 0; k < 3; ++k) covered.at[k] = back.p[k];
   for (int k = 0; k < 3; ++k) {
     const LightSpacePoint& e = front.p[k];
     clip(*current, *next, [&](const LightSpacePoint& x) {
@@ -95,27 +95,38 @@ bool region_behind(const Prepared& back, const Prepared& front, double gap, doub
     std::swap(current, next);
     if (current->count < 3) return false;
   }
-  clip(*current, *next, [&](const LightSpacePoint& x) { return x.depth - front.depth_at(x.u, x.v) - gap; });
-  std::swap(current, next);
-  if (current->count >= 3 && std::isfinite(most)) {
-    clip(*current, *next, [&](const LightSpacePoint& x) { return most - (x.depth - front.depth_at(x.u, x.v)); });
-    std::swap(current, next);
+  if (current != &covered) covered = *current;
+  return true;
+}
+
+// The part of `covered` (on `back`, inside `front`'s footprint) lying behind `front` by at least
+// `gap` and, when `most` is finite, by at most `most`, into `region`; false when empty.
+bool region_behind(const Polygon& covered, const Prepared& front, double gap, double most, Polygon& region) {
+  clip(covered, region, [&](const LightSpacePoint& x) { return x.depth - front.depth_at(x.u, x.v) - gap; });
+  if (region.count >= 3 && std::isfinite(most)) {
+    Polygon scratch;
+    clip(region, scratch, [&](const LightSpacePoint& x) { return most - (x.depth - front.depth_at(x.u, x.v)); });
+    region = scratch;
   }
-  if (current != &region) region = *current;
   return region.count >= 3;
 }
 
 // Near cover (second_layer::near_cover_offset): lowers each texel's cap to the shallowest point of
 // the convex `region` inside its closed square at or below the texel's floor, lower + `offset`.
 // Per texel, exact clipping in double: the square's four sides, then depth >= floor. Texels without
-// an exit have nothing to cap.
+// an exit have nothing to cap, and texels where no point of the region at or below the floor could
+// change the capped interval (its bound, max(floor, shallowest), is not below the cap so far, or
+// float(bound) - margin >= upper, as apply_exit_caps computes it) are skipped: the result is exact
+// where it matters, like the pruned regions above.
 void lower_caps_above_floor(const Polygon& region, const TexelWindow& window, const TileIntervals& intervals,
-                            double offset, std::span<float> cap) {
+                            double offset, float exit_margin, std::span<float> cap) {
   double lo_u = region.at[0].u, hi_u = lo_u, lo_v = region.at[0].v, hi_v = lo_v, deepest = region.at[0].depth;
+  double shallowest = deepest;
   for (unsigned k = 1; k < region.count; ++k) {
     lo_u = std::min(lo_u, region.at[k].u), hi_u = std::max(hi_u, region.at[k].u);
     lo_v = std::min(lo_v, region.at[k].v), hi_v = std::max(hi_v, region.at[k].v);
     deepest = std::max(deepest, region.at[k].depth);
+    shallowest = std::min(shallowest, region.at[k].depth);
   }
   const double size = window.size;
   lo_u -= window.u0 + kWiden, hi_u += kWiden - window.u0, lo_v -= window.v0 + kWiden, hi_v += kWiden - window.v0;
@@ -123,12 +134,32 @@ void lower_caps_above_floor(const Polygon& region, const TexelWindow& window, co
   auto texel = [&](double at) { return uint32_t(std::clamp(std::floor(at), 0.0, size - 1)); };
   const uint32_t i0 = texel(lo_u), i1 = texel(hi_u), j0 = texel(lo_v), j1 = texel(hi_v);
   Polygon a, b;
-  for (uint32_t j = j0; j <= j1; ++j)
-    for (uint32_t i = i0; i <= i1; ++i) {
+  for (uint32_t j = j0; j <= j1; ++j) {
+    // Only the texels the region reaches in this row (near-cover regions are thin strips along folds,
+    // their boxes mostly empty): its u-extent within the row's band, widened like the box.
+    const double band_lo = window.v0 + j - kWiden, band_hi = window.v0 + j + 1 + kWiden;
+    double row_lo = std::numeric_limits<double>::infinity(), row_hi = -row_lo;
+    for (unsigned k = 0; k < region.count; ++k) {
+      const LightSpacePoint& p = region.at[k];
+      const LightSpacePoint& q = region.at[k + 1 == region.count ? 0 : k + 1];
+      if (p.v >= band_lo && p.v <= band_hi) row_lo = std::min(row_lo, p.u), row_hi = std::max(row_hi, p.u);
+      for (double y : {band_lo, band_hi})
+        if ((p.v < y) != (q.v < y)) {
+          const double u = p.u + (y - p.v) / (q.v - p.v) * (q.u - p.u);
+          row_lo = std::min(row_lo, u), row_hi = std::max(row_hi, u);
+        }
+    }
+    if (!(row_lo <= row_hi)) continue;
+    const uint32_t first = std::max(i0, texel(row_lo - window.u0 - kWiden));
+    const uint32_t last = std::min(i1, texel(row_hi - window.u0 + kWiden));
+    for (uint32_t i = first; i <= last; ++i) {
       const DepthInterval& interval = intervals.at(i, j);
       if (!(interval.upper > interval.lower && interval.lower < 1.0f)) continue;
       const double floor_depth = double(interval.lower) + offset;
       if (deepest < floor_depth) continue;
+      float& slot = cap[size_t(j) * window.size + i];
+      const double bound = std::max(floor_depth, shallowest);
+      if (!(bound < slot) || float(bound) - exit_margin >= interval.upper) continue;
       const double su = window.u0 + i, sv = window.v0 + j;
       clip(region, a, [&](const LightSpacePoint& x) { return x.u - su; });
       clip(a, b, [&](const LightSpacePoint& x) { return su + 1 - x.u; });
@@ -136,11 +167,11 @@ void lower_caps_above_floor(const Polygon& region, const TexelWindow& window, co
       clip(a, b, [&](const LightSpacePoint& x) { return sv + 1 - x.v; });
       clip(b, a, [&](const LightSpacePoint& x) { return x.depth - floor_depth; });
       if (a.count == 0) continue;
-      double shallowest = a.at[0].depth;
-      for (unsigned k = 1; k < a.count; ++k) shallowest = std::min(shallowest, a.at[k].depth);
-      float& slot = cap[size_t(j) * window.size + i];
-      slot = std::min(slot, float(shallowest));
+      double lowest = a.at[0].depth;
+      for (unsigned k = 1; k < a.count; ++k) lowest = std::min(lowest, a.at[k].depth);
+      slot = std::min(slot, float(lowest));
     }
+  }
 }
 
 // Pairs (i < j) of `candidates` whose widened footprint boxes overlap, found by Embree's BVH-BVH
@@ -235,29 +266,46 @@ std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& sc
 
   // Per cell, the largest upper a cap could still lower (-inf: nothing to cap in the cell).
   const float kNothing = -std::numeric_limits<float>::infinity();
-  std::vector<float> cell_upper(size_t(cells) * cells, kNothing);
+  // Per cell, the smallest lower among texels with an exit (+inf: none), for the near-cover floor.
+  const float kNone = std::numeric_limits<float>::infinity();
+  std::vector<float> cell_upper(size_t(cells) * cells, kNothing), cell_lower(size_t(cells) * cells, kNone);
   for (uint32_t v = 0; v < size; ++v)
     for (uint32_t u = 0; u < size; ++u) {
       const DepthInterval& t = intervals.at(u, v);
       if (t.upper > t.lower && t.lower < 1.0f) {
-        float& slot = cell_upper[size_t(v / kCell) * cells + u / kCell];
-        slot = std::max(slot, t.upper);
+        const size_t cell = size_t(v / kCell) * cells + u / kCell;
+        cell_upper[cell] = std::max(cell_upper[cell], t.upper);
+        cell_lower[cell] = std::min(cell_lower[cell], t.lower);
       }
     }
-  std::vector<std::vector<float>> pyramid{std::move(cell_upper)};
+  std::vector<std::vector<float>> pyramid{std::move(cell_upper)}, lower_pyramid{std::move(cell_lower)};
   std::vector<uint32_t> sides{cells};
   while (sides.back() > 1) {
     const uint32_t from = sides.back(), to = (from + 1) / 2;
-    std::vector<float> level(size_t(to) * to, kNothing);
+    std::vector<float> level(size_t(to) * to, kNothing), lower_level(size_t(to) * to, kNone);
     const std::vector<float>& fine = pyramid.back();
+    const std::vector<float>& fine_lower = lower_pyramid.back();
     for (uint32_t y = 0; y < from; ++y)
       for (uint32_t x = 0; x < from; ++x) {
-        float& slot = level[size_t(y / 2) * to + x / 2];
-        slot = std::max(slot, fine[size_t(y) * from + x]);
+        const size_t at = size_t(y / 2) * to + x / 2;
+        level[at] = std::max(level[at], fine[size_t(y) * from + x]);
+        lower_level[at] = std::min(lower_level[at], fine_lower[size_t(y) * from + x]);
       }
     pyramid.push_back(std::move(level));
+    lower_pyramid.push_back(std::move(lower_level));
     sides.push_back(to);
   }
+  // The smallest lower of a texel with an exit in texels [lo, hi] (global), a bound from its cells.
+  auto smallest_lower = [&](double lo_u, double hi_u, double lo_v, double hi_v) {
+    uint32_t x0 = cell_of(lo_u - window.u0), x1 = cell_of(hi_u - window.u0);
+    uint32_t y0 = cell_of(lo_v - window.v0), y1 = cell_of(hi_v - window.v0);
+    size_t level = 0;
+    while (std::max(x1 - x0, y1 - y0) > 2) x0 /= 2, x1 /= 2, y0 /= 2, y1 /= 2, ++level;
+    float lowest = kNone;
+    for (uint32_t y = y0; y <= y1; ++y)
+      for (uint32_t x = x0; x <= x1; ++x) lowest = std::min(lowest, lower_pyramid[level][size_t(y) * sides[level] + x]);
+    return lowest;
+  };
   // Could a region whose depth is >= `shallowest` change an interval in texels [lo, hi] (global)?
   auto matters = [&](double shallowest, double lo_u, double hi_u, double lo_v, double hi_v) {
     const float capped = float(shallowest) - exit_margin;  // as apply_exit_caps computes it, at the most
@@ -277,7 +325,7 @@ std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& sc
   const double same_surface = second_layer::kSameSurface * kEpsilonShrink;
   const double floor_offset =
       second_layer::near_cover_offset(coplanar_epsilon) - coplanar_epsilon * (1 - kEpsilonShrink);
-  Polygon region;
+  Polygon covered, region;
   // Could `region` (every point at least `shallowest` deep) lower a cap? Counts the skip if not.
   auto region_matters = [&](double& shallowest) {
     double lo_u = region.at[0].u, hi_u = lo_u, lo_v = region.at[0].v, hi_v = lo_v;
@@ -300,20 +348,32 @@ std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& sc
       ++local.skipped;
       return;
     }
+    // Near cover needs a point of `back` at or below some texel's floor in the pair's box.
+    const bool behind_by_epsilon = back.zmax > front.zmin + epsilon;
+    const bool near = back.zmin <= front.zmax + epsilon &&
+                      back.zmax >= double(smallest_lower(std::max(back.lo_u, front.lo_u) - 1,
+                                                         std::min(back.hi_u, front.hi_u) + 1,
+                                                         std::max(back.lo_v, front.lo_v) - 1,
+                                                         std::min(back.hi_v, front.hi_v) + 1)) + floor_offset;
+    if (!behind_by_epsilon && !near) {
+      ++local.skipped;
+      return;
+    }
     ++local.pairs_tested;
     double shallowest = 0;
+    if (!covered_by(back, front, covered)) return;
     // Behind by epsilon: the second layer wherever it lies.
-    if (back.zmax > front.zmin + epsilon && region_behind(back, front, epsilon, kInfinity, region) &&
+    if (behind_by_epsilon && region_behind(covered, front, epsilon, kInfinity, region) &&
         region_matters(shallowest)) {
       ++local.regions;
       for (unsigned k = 1; k + 1 < region.count; ++k)
         lower_caps_by_triangle(region.at[0], region.at[k], region.at[k + 1], window, cap, &local.texels);
     }
     // Near cover: behind by less than epsilon, the second layer below each texel's lower + offset.
-    if (back.zmin <= front.zmax + epsilon && region_behind(back, front, same_surface, epsilon, region) &&
+    if (near && region_behind(covered, front, same_surface, epsilon, region) &&
         region_matters(shallowest)) {
       ++local.near_regions;
-      lower_caps_above_floor(region, window, intervals, floor_offset, cap);
+      lower_caps_above_floor(region, window, intervals, floor_offset, exit_margin, cap);
     }
   };
   if (pyramid.back()[0] == kNothing) candidates.clear();  // no exit in the tile: nothing to cap
