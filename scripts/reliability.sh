@@ -19,7 +19,7 @@ checks=(
   "SIGKILL during build, resume|test_faults|Faults.SigkillAtTwentyRandomMomentsThenResumeStoresExactlyTheCleanBuild|terragen 1024² in 64² tiles, raw+mh+mmh+dagmh, 2 threads|20 SIGKILLs at uniform random moments in [0, clean/2] of each run (scene load, ray casting, encoding, commits, merge); each killed store opened|none: tiles, top, preview, tileinfo byte-identical to an uninterrupted build"
   "SIGKILL during merge, resume|test_shard_merge|ShardMerge.SigkillAtTwentyRandomMomentsThenResumeEqualsTheOneMachineBuild|4 shard stores of fzk_haus 4096² (512² tiles, raw+mh+mmh+dagmh) merged in 1 MiB transactions|20 SIGKILLs at uniform random moments in [0, clean] of fresh and resumed merges; each killed store opened|none: the resumed merge equals the one-machine build (every blob, info, progress record and top tree byte-identical)"
   "Disk full|test_faults|Faults.DiskFullBuildExitsOneAndResumesWhenSpaceIsBack|the same build into a tmpfs of half the store's size (private mount namespace)|ENOSPC / short write mid-build; then the tmpfs is grown and the same command rerun|none: exit 1 with 'the disk is full', inspect reads the incomplete store, the resume is byte-identical"
-  "Swap of builds under load|test_server|ServerReload.SwapUnderLoadLosesNoRequestAndNeverMixesBuilds|4 keep-alive clients sending 512-point binary batches without pause|store symlink repointed (ln -sfn) + reload (what SIGHUP does) mid-load|0 requests lost, 0 batches mixing builds (X-Shadowtiles-Build names the answering build)"
+  "Swap of builds under load|test_serve_process|ServerReload.SwapUnderLoadLosesNoRequestAndNeverMixesBuilds:ServerReload.SighupToTheServeProcessSwapsUnderLoadLosingNothing|4 keep-alive clients sending 512-point binary batches without pause, to an in-process server and to a real shadowtiles serve process|store symlink repointed (ln -sfn) mid-load, then Server::reload, or kill -HUP to the serve process|0 requests lost, 0 batches mixing builds (X-Shadowtiles-Build names the answering build)"
   "Slow clients|test_server_limits|ServerLimitsTest.SlowClientsNeverStarveQueries|/healthz and point queries|max_connections - 2 connections that send a partial request and stall|none: queries answer well inside the read timeout"
   "Oversized, chunked and costly requests|test_server_limits|ServerLimitsTest.OversizedBodiesAreRefusedAtOnce:ServerLimitsTest.BatchesAreAdmittedByCost:ServerLimitsTest.FullServerAnswers503AtOnce:ServerLimitsTest.PerAddressCap|declared Content-Length over the limit, chunked bodies, batches over max_batch_cost, a full server, one address over its cap|hostile clients|none: 413 / 411 / 503 at once, never a hang"
   "Hostile requests|test_server|ServerTest.EveryBadInputGetsA4xxAndTheServerKeepsAnswering|malformed query strings, JSON and binary batches, URLs, methods|each request once, then normal queries|none: every one a 4xx with a JSON error, no 5xx"
@@ -44,7 +44,9 @@ for check in "${checks[@]}"; do
   if run_check "$name" "$binary" "$filter"; then result=pass; else result=FAIL; failed=1; lost="see the log"; fi
   log="$work/$binary.$(echo "$name" | tr -c 'a-zA-Z0-9' _).log"
   tests=$(grep -c '^\[       OK \]' "$log" || true)
-  figures=$(grep -E '^(SIGKILL|merge SIGKILL|swap under load|slow clients held):' "$log" | tr '\n' ' ' | sed 's/ *$//')
+  # A filter that matches no test (a test renamed or moved) is a failure, not a pass.
+  if [ "$tests" -eq 0 ]; then result=FAIL; failed=1; lost="no test matched $binary --gtest_filter=$filter"; fi
+  figures=$(grep -E '^(SIGKILL|merge SIGKILL|swap under load[^:]*|slow clients held):' "$log" | tr '\n' ' ' | sed 's/ *$//')
   rows+=("| $name | $tried | $fault | $result ($tests tests, $(( $(date +%s) - start )) s) | ${figures:--} | $lost |")
   echo "$name: $result"
 done
