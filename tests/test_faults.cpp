@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "store/lmdb_store.hpp"
+#include "tests/random_kills.hpp"
 #include "testing_support.hpp"
 
 namespace shadowtiles {
@@ -90,49 +91,21 @@ TEST(Faults, SigkillAtTwentyRandomMomentsThenResumeStoresExactlyTheCleanBuild) {
   const double clean_s = std::chrono::duration<double>(Clock::now() - start).count();
 
   // Kill moments uniform in [0, clean/2] after each start, so kills land in every phase (scene load,
-  // ray casting, encoding, commits, the top-level merge) of fresh and resumed runs. A run that
-  // completes ends its round: the store is checked and the next round starts from nothing. Runs go on
-  // past 20 kills while fewer than 5 landed between tile commits (on a loaded machine the scene load
-  // takes a larger share of each run).
-  std::mt19937 rng(18);
-  std::uniform_real_distribution<double> moment(0.0, clean_s / 2);
+  // ray casting, encoding, commits, the top-level merge) of fresh and resumed runs.
   const size_t clean_tiles = records(dir.path() / "clean", store::Database::tiles).size();
-  int kills = 0, round = 0, completed_rounds = 0, runs = 0, mid_build_kills = 0;
-  auto round_dir = [&] { return dir.path() / ("killed-" + std::to_string(round)); };
-  while ((kills < 20 || mid_build_kills < 5) && runs < 200) {
-    ++runs;
-    const pid_t pid = spawn_process(build_args(round_dir()), log);
-    std::this_thread::sleep_for(std::chrono::duration<double>(moment(rng)));
-    if (int status = wait_status(pid, WNOHANG); status != -1) {
-      ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "a resumed build failed: see " << log;
-      expect_same_records(round_dir(), dir.path() / "clean");
-      ++completed_rounds;
-      ++round;
-      continue;
-    }
-    ASSERT_EQ(::kill(pid, SIGKILL), 0);
-    const int status = wait_status(pid);
-    if (WIFEXITED(status)) {  // finished between the check and the kill
-      ASSERT_EQ(WEXITSTATUS(status), 0) << "see " << log;
-      expect_same_records(round_dir(), dir.path() / "clean");
-      ++completed_rounds;
-      ++round;
-      continue;
-    }
-    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
-    ++kills;
-    // The killed store opens and holds only whole tiles (LMDB commits are atomic).
-    if (std::filesystem::exists(round_dir() / "data.mdb")) {
-      const size_t committed = records(round_dir(), store::Database::tiles).size();
-      EXPECT_LE(committed, clean_tiles);
-      if (committed > 0 && committed < clean_tiles) ++mid_build_kills;
-    }
-  }
-  EXPECT_GE(kills, 20);
-  EXPECT_GE(mid_build_kills, 5) << "kills must also land between tile commits";
-  // The last round resumes to the end.
-  ASSERT_EQ(wait_status(spawn_process(build_args(round_dir()), log)), 0) << "see " << log;
-  expect_same_records(round_dir(), dir.path() / "clean");
+  auto round_dir = [&](int round) { return dir.path() / ("killed-" + std::to_string(round)); };
+  const testing::RandomKillTally tally = testing::kill_at_random_moments(
+      {.max_moment_s = clean_s / 2, .kills = 20, .between_commits = 5, .seed = 18},
+      [&](int round) { return build_args(round_dir(round)); }, log,
+      [&](int round) { expect_same_records(round_dir(round), dir.path() / "clean"); },
+      [&](int round) {
+        return std::filesystem::exists(round_dir(round) / "data.mdb")
+                   ? records(round_dir(round), store::Database::tiles).size()
+                   : size_t(0);
+      },
+      clean_tiles);
+  const int kills = tally.kills, mid_build_kills = tally.between_commits, runs = tally.runs,
+            completed_rounds = tally.completed_rounds;
   std::printf("SIGKILL: %d kills (%d between tile commits) over %d runs, %d rounds completed and checked before "
               "the final resume, clean build %.2f s\n", kills, mid_build_kills, runs, completed_rounds, clean_s);
 }

@@ -19,6 +19,7 @@
 #include "builder/shard_plan.hpp"
 #include "codec/store_meta.hpp"
 #include "store/lmdb_store.hpp"
+#include "tests/random_kills.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles {
@@ -201,39 +202,19 @@ TEST_F(ShardMerge, SigkillAtTwentyRandomMomentsThenResumeEqualsTheOneMachineBuil
       << "see " << log;
   const double clean_s = std::chrono::duration<double>(Clock::now() - start).count();
   const size_t clean_tiles = read_all(dir_->path() / "single", store::Database::tiles).size();
-  std::mt19937 rng(16);
-  std::uniform_real_distribution<double> moment(0.0, clean_s);
-  int kills = 0, round = 0, completed_rounds = 0, runs = 0, mid_merge_kills = 0;
-  auto round_dir = [&] { return dir_->path() / ("merge-killed-" + std::to_string(round)); };
-  while ((kills < 20 || mid_merge_kills < 3) && runs < 200) {
-    ++runs;
-    const pid_t pid = testing::spawn_process(merge_args(round_dir()), log);
-    std::this_thread::sleep_for(std::chrono::duration<double>(moment(rng)));
-    int status = testing::wait_status(pid, WNOHANG);
-    if (status == -1) {
-      ASSERT_EQ(::kill(pid, SIGKILL), 0);
-      status = testing::wait_status(pid);
-    }
-    if (WIFEXITED(status)) {  // finished before the kill: the round is checked and the next starts anew
-      ASSERT_EQ(WEXITSTATUS(status), 0) << "a merge failed: see " << log;
-      expect_same_build(round_dir(), dir_->path() / "single");
-      ++completed_rounds;
-      ++round;
-      continue;
-    }
-    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
-    ++kills;
-    // The killed store opens and holds only whole transactions.
-    if (std::filesystem::exists(round_dir() / "data.mdb")) {
-      const size_t committed = read_all(round_dir(), store::Database::tiles).size();
-      EXPECT_LE(committed, clean_tiles);
-      if (committed > 0 && committed < clean_tiles) ++mid_merge_kills;
-    }
-  }
-  EXPECT_GE(kills, 20);
-  EXPECT_GE(mid_merge_kills, 3) << "kills must also land between the merge's commits";
-  ASSERT_EQ(testing::wait_status(testing::spawn_process(merge_args(round_dir()), log)), 0) << "see " << log;
-  expect_same_build(round_dir(), dir_->path() / "single");
+  auto round_dir = [&](int round) { return dir_->path() / ("merge-killed-" + std::to_string(round)); };
+  const testing::RandomKillTally tally = testing::kill_at_random_moments(
+      {.max_moment_s = clean_s, .kills = 20, .between_commits = 3, .seed = 16},
+      [&](int round) { return merge_args(round_dir(round)); }, log,
+      [&](int round) { expect_same_build(round_dir(round), dir_->path() / "single"); },
+      [&](int round) {
+        return std::filesystem::exists(round_dir(round) / "data.mdb")
+                   ? read_all(round_dir(round), store::Database::tiles).size()
+                   : size_t(0);
+      },
+      clean_tiles);
+  const int kills = tally.kills, mid_merge_kills = tally.between_commits, runs = tally.runs,
+            completed_rounds = tally.completed_rounds;
   std::printf("merge SIGKILL: %d kills (%d between commits) over %d runs, %d rounds completed and checked, clean "
               "merge %.2f s, %zu tiles\n",
               kills, mid_merge_kills, runs, completed_rounds, clean_s, clean_tiles);
