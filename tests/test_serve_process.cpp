@@ -195,9 +195,10 @@ TEST(ServerReload, SwapsToTheBuildTheStorePathPointsAt) {
 }
 
 
-// Two bunny stores lit from different suns, and each one's binary answer to the same batch.
+// Two bunny stores lit from different suns, each one's binary answer to the same batch, and the
+// store link `current` pointing at a.
 struct TwoBuilds {
-  std::filesystem::path a, b;
+  std::filesystem::path a, b, current;
   std::vector<Vec3> points;
   std::map<std::string, std::string> expected;  // build id -> the binary answer of the whole batch
 };
@@ -230,6 +231,8 @@ void make_two_builds(const std::filesystem::path& dir, TwoBuilds* builds) {
   ASSERT_EQ(builds->expected.size(), 2u);
   ASSERT_NE(builds->expected.begin()->second, builds->expected.rbegin()->second)
       << "the two builds must answer differently";
+  builds->current = dir / "current";
+  std::filesystem::create_directory_symlink(builds->a, builds->current);
 }
 
 // 4 keep-alive clients send the batch without pause to the server on `port` while `swap` repoints
@@ -293,8 +296,7 @@ TEST(ServerReload, SwapUnderLoadLosesNoRequestAndNeverMixesBuilds) {
   TwoBuilds builds;
   make_two_builds(dir.path(), &builds);
   if (HasFatalFailure()) return;
-  const auto current = dir.path() / "current";
-  std::filesystem::create_directory_symlink(builds.a, current);
+  const auto& current = builds.current;
   auto config = test_config();
   config.reload_poll_s = 0;  // only the explicit reload below swaps
   RunningServer running(config, &current);
@@ -313,8 +315,7 @@ TEST(ServerReload, SighupToTheServeProcessSwapsUnderLoadLosingNothing) {
   TwoBuilds builds;
   make_two_builds(dir.path(), &builds);
   if (HasFatalFailure()) return;
-  const auto current = dir.path() / "current";
-  std::filesystem::create_directory_symlink(builds.a, current);
+  const auto& current = builds.current;
   std::ofstream(dir.path() / "serve.json")
       << json{{"store", current.string()}, {"port", 0}, {"reload_poll_s", 0}, {"keep_alive_timeout_s", 1}}.dump();
   ServeChild child = start_serve_child("--config " + (dir.path() / "serve.json").string());
