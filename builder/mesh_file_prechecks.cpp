@@ -109,7 +109,6 @@ class FileCursor {
       : in_(file, std::ios::binary), position_(offset), size_(size) {}
   bool is_open() const { return bool(in_); }
   uint64_t left() const { return size_ - std::min(size_, position_); }
-  uint64_t position() const { return position_; }
   void skip(uint64_t bytes) { position_ += bytes; }
   // Reads `bytes` (<= 8) at the cursor; false at the end of the file.
   bool read(void* out, size_t bytes) {
