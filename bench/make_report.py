@@ -388,7 +388,7 @@ def report(doc, charts, md_path, sizes=()):
     if os.path.exists(md_path):
         with open(md_path) as f:
             previous = f.read()
-        for name in ("queries", "contract-sizes"):
+        for name in ("queries", "queries-surfaces", "contract-sizes"):
             kept = re.search(f"<!-- {name}:begin -->.*?<!-- {name}:end -->", previous, re.S)
             if kept:
                 out += [kept.group(0), ""]

@@ -157,6 +157,78 @@ TEST(Bench, ReportMergesRunsIntoMarkdownAndCharts) {
       EXPECT_GT(std::filesystem::file_size(charts / (std::string(chart) + ext)), 1000u) << chart << ext;
 }
 
+// "contract" builds the scene's stores under that receiver contract and every row names it; on an open
+// scan the surfaces contract is what lets the trees shrink (docs/receiver-contracts.md), and the
+// surfaces block of the query report is written beside the default one.
+TEST(Bench, ContractKeyBuildsUnderThatContractAndRowsNameIt) {
+  if (!std::filesystem::exists(st::testing::shared_scene("bunny/stanford-bunny.obj")))
+    GTEST_SKIP() << "needs ../shared/scenes";
+  TempDir dir;
+  const nlohmann::json bunny = {{"file", "bunny/stanford-bunny.obj"}, {"up", "y"}, {"sun", {135, 45}}};
+  nlohmann::json anywhere = bunny, surfaces = bunny;
+  anywhere["name"] = "bunny";
+  surfaces["name"] = "bunny_surfaces";
+  surfaces["contract"] = "surfaces";
+  nlohmann::json config = {{"scene_root", (st::testing::shared_scene("")).string()},
+                           {"methods", {"raw", "mh"}},
+                           {"resolutions", {256}},
+                           {"tile_size", 128},
+                           {"receivers", 500},
+                           {"camera", {{"width", 0}}},
+                           {"threads", {1}},
+                           {"batch_points", 20000},
+                           {"min_seconds", 0.01},
+                           {"scenes", {anywhere, surfaces}}};
+  std::ofstream(dir.path() / "contracts.json") << config.dump(2);
+  std::string output;
+  const auto out = dir.path() / "out";
+  ASSERT_EQ(st::testing::run_command(st::testing::cli_path().string() + " -q bench --config " +
+                                         (dir.path() / "contracts.json").string() + " --out " + out.string(),
+                                     &output),
+            0)
+      << output;
+  const auto doc = nlohmann::json::parse(read_file(out / "results.json"), nullptr, false);
+  ASSERT_FALSE(doc.is_discarded());
+  std::map<std::string, nlohmann::json> rows;  // "scene/method"
+  for (const auto& row : doc["rows"])
+    rows[row["scene"].get<std::string>() + "/" + row["method"].get<std::string>()] = row;
+  ASSERT_EQ(rows.size(), 4u);
+  EXPECT_EQ(rows["bunny/mh"]["contract"], "anywhere");
+  EXPECT_EQ(rows["bunny_surfaces/mh"]["contract"], "surfaces");
+  EXPECT_EQ(rows["bunny_surfaces/raw"]["contract"], "surfaces");
+  for (const auto& build : doc["builds"])
+    EXPECT_EQ(build["contract"], build["scene"] == "bunny" ? "anywhere" : "surfaces");
+  // Zero-width intervals everywhere under anywhere; under surfaces the tree has room to shrink.
+  EXPECT_LT(rows["bunny_surfaces/mh"]["payload_bytes"].get<double>(),
+            0.5 * rows["bunny/mh"]["payload_bytes"].get<double>());
+  // Every receiver the bench samples lies on a surface: MH answers them as raw does.
+  EXPECT_LE(rows["bunny_surfaces/mh"]["false_lit"].get<int64_t>(), rows["bunny_surfaces/raw"]["false_lit"].get<int64_t>());
+
+  const auto md = dir.path() / "BENCH.md";
+  std::ofstream(md) << "# Benchmarks\n\n<!-- queries:begin -->\nkept\n<!-- queries:end -->\n";
+  const std::string script = (std::filesystem::path(SHADOWTILES_SOURCE_DIR) / "bench" / "query_report.py").string();
+  ASSERT_EQ(st::testing::run_command("python3 " + script + " " + (out / "results.json").string() + " --md " + md.string() +
+                                         " --block queries-surfaces",
+                                     &output),
+            0)
+      << output;
+  const std::string text = read_file(md);
+  EXPECT_NE(text.find("<!-- queries:begin -->\nkept\n<!-- queries:end -->"), std::string::npos) << text;
+  EXPECT_NE(text.find("<!-- queries-surfaces:begin -->"), std::string::npos) << text;
+  EXPECT_NE(text.find("receiver contract anywhere/surfaces"), std::string::npos) << text;
+}
+
+TEST(Bench, RejectsAnUnknownContract) {
+  TempDir dir;
+  std::ofstream(dir.path() / "bad.json") << R"({"scenes": [{"name": "x", "file": "x.obj", "contract": "everywhere"}]})";
+  std::string output;
+  int code = st::testing::run_command(st::testing::cli_path().string() + " bench --config " +
+                                          (dir.path() / "bad.json").string() + " --out " + (dir.path() / "o").string(),
+                                      &output);
+  EXPECT_EQ(code, 2) << output;
+  EXPECT_NE(output.find("contract must be"), std::string::npos) << output;
+}
+
 TEST(Bench, RejectsUnknownConfigKeys) {
   TempDir dir;
   std::ofstream(dir.path() / "bad.json") << R"({"scenes": [{"name": "x", "file": "x.obj"}], "resolution": [512]})";

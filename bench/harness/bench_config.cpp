@@ -67,15 +67,16 @@ Result<BenchConfig> parse_bench_config(const nlohmann::json& json, const std::fi
   config.source = json;
   if (Status s = check_keys(json, {"description", "scene_root", "methods", "resolutions", "tile_size", "build_threads",
                                    "receivers", "camera", "pcf_kernels", "pcf_supersample", "threads", "min_seconds",
-                                   "cache_mib", "keep_stores", "seed", "batch_points", "scenes"},
+                                   "cache_mib", "keep_stores", "seed", "batch_points", "contract", "scenes"},
                             "the config");
       !s)
     return s.error();
   std::string scene_root = ".";
   std::vector<uint32_t> resolutions{1024};
   size_t receivers = 2000;
+  std::string contract_name = "anywhere";
   CameraSpec camera;
-  for (auto s : {read(json, "scene_root", scene_root), read(json, "resolutions", resolutions),
+  for (auto s : {read(json, "scene_root", scene_root), read(json, "contract", contract_name), read(json, "resolutions", resolutions),
                  read(json, "tile_size", config.tile_size), read(json, "build_threads", config.build_threads),
                  read(json, "receivers", receivers), read(json, "pcf_kernels", config.pcf_kernels),
                  read(json, "pcf_supersample", config.pcf_supersample), read(json, "threads", config.threads),
@@ -86,6 +87,8 @@ Result<BenchConfig> parse_bench_config(const nlohmann::json& json, const std::fi
     if (!s) return s.error();
   if (json.contains("camera"))
     if (Status s = read_camera(json["camera"], camera); !s) return s.error();
+  auto contract = parse_receiver_contract(contract_name);
+  if (!contract) return bad("contract must be \"anywhere\" or \"surfaces\"");
   if (Status s = check_resolutions(resolutions, "resolutions"); !s) return s.error();
   if (config.tile_size == 0 || (config.tile_size & (config.tile_size - 1))) return bad("tile_size must be a power of two");
   if (config.build_threads < 1 || config.build_threads > 256) return bad("build_threads must be in [1, 256]");
@@ -107,7 +110,7 @@ Result<BenchConfig> parse_bench_config(const nlohmann::json& json, const std::fi
                                                                                : base_dir / scene_root;
   std::set<std::string> names;
   for (const auto& item : json["scenes"]) {
-    if (Status s = check_keys(item, {"name", "file", "up", "sun", "heightfield", "resolutions", "receivers", "camera"},
+    if (Status s = check_keys(item, {"name", "file", "up", "sun", "heightfield", "resolutions", "receivers", "contract", "camera"},
                               "a scene");
         !s)
       return s.error();
@@ -115,12 +118,15 @@ Result<BenchConfig> parse_bench_config(const nlohmann::json& json, const std::fi
     scene.resolutions = resolutions;
     scene.receivers = receivers;
     scene.camera = camera;
-    std::string file, up = "z";
+    std::string file, up = "z", scene_contract = receiver_contract_name(*contract);
     std::vector<double> sun{135, 45};
     for (auto s : {read(item, "name", scene.name), read(item, "file", file), read(item, "up", up),
                    read(item, "sun", sun), read(item, "heightfield", scene.heightfield),
-                   read(item, "resolutions", scene.resolutions), read(item, "receivers", scene.receivers)})
+                   read(item, "resolutions", scene.resolutions), read(item, "receivers", scene.receivers),
+                   read(item, "contract", scene_contract)})
       if (!s) return s.error();
+    if (auto c = parse_receiver_contract(scene_contract)) scene.contract = *c;
+    else return bad("scene '" + scene.name + "': contract must be \"anywhere\" or \"surfaces\"");
     if (item.contains("camera"))
       if (Status s = read_camera(item["camera"], scene.camera); !s) return s.error();
     if (scene.name.empty() || file.empty()) return bad("every scene needs a 'name' and a 'file'");

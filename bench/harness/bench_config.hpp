@@ -9,6 +9,8 @@
 //   tile_size       tile side in texels (clamped to the map)
 //   build_threads   builder worker threads
 //   receivers       receivers sampled uniformly over the surfaces (per scene)
+//   contract        the stores' receiver contract, "anywhere" (default) or "surfaces"
+//                   (docs/receiver-contracts.md); every receiver the bench samples lies on a surface
 //   camera          {"width", "height", "azimuth", "elevation", "fov"}: receivers = the visible
 //                   pixels of a fixed camera, in screen order; width 0 disables
 //   pcf_kernels     [3, 5] odd kernel sides
@@ -21,6 +23,7 @@
 //   batch_points    surface points of the query_batch rows (shuffled; 0 disables them)
 //   scenes          [{"name", "file", "up": "y"|"z", "sun": [az, el], "heightfield": ["*"],
 //                     "resolutions": [...] (overrides), "receivers": n (overrides),
+//                     "contract": "anywhere"|"surfaces" (overrides),
 //                     "camera": {...} (overrides keys of the default camera)}]
 // Errors: invalid_input with the offending key; not_found when the config file is missing.
 // Thread safety: plain value types.
@@ -34,6 +37,7 @@
 #include <nlohmann/json.hpp>
 
 #include "codec/light_frame.hpp"
+#include "codec/receiver_contract.hpp"
 #include "store/method.hpp"
 #include "common/result.hpp"
 
@@ -56,6 +60,7 @@ struct SceneSpec {
   std::vector<std::string> heightfield;
   std::vector<uint32_t> resolutions;
   size_t receivers = 2000;
+  ReceiverContract contract = ReceiverContract::anywhere;
   CameraSpec camera;
 };
 

@@ -115,6 +115,7 @@ Status measure_store(const BenchConfig& config, const SceneSpec& spec, uint32_t 
     const char* name = store::method_name(method);
     Json row;
     row["scene"] = spec.name;
+    row["contract"] = receiver_contract_name(spec.contract);
     row["resolution"] = resolution;
     row["tile_size"] = (*map)->layout().tile_size();
     row["method"] = name;
@@ -308,6 +309,7 @@ Status run_bench(const BenchConfig& config, const std::filesystem::path& out_dir
       build.tile_size = std::min(config.tile_size, resolution);
       build.threads = config.build_threads;
       build.methods = methods;
+      build.receivers = spec.contract;
       build.load = load;
       build.overwrite = true;
       spdlog::info("  building {}^2 (tiles {}^2)", resolution, build.tile_size);
@@ -315,7 +317,8 @@ Status run_bench(const BenchConfig& config, const std::filesystem::path& out_dir
       auto summary = run_build(build);
       if (!summary) return summary.error();
       const double peak = peak_rss_mib();
-      doc["builds"].push_back({{"scene", spec.name}, {"resolution", resolution}, {"peak_rss_mib", peak},
+      doc["builds"].push_back({{"scene", spec.name}, {"contract", receiver_contract_name(spec.contract)},
+                               {"resolution", resolution}, {"peak_rss_mib", peak},
                                {"stats", summary->stats}});
       Json rows = Json::array();
       Status measured = measure_store(config, spec, resolution, data, truth, methods, summary->stats, peak, store_dir, rows);
