@@ -88,7 +88,8 @@ nlohmann::json build_identity(const BuildConfig& config, uint64_t scene_hash, ui
 
 // One line when most triangles are one-sided under the `anywhere` contract: their texels get
 // zero-width intervals, which the MH family cannot compress.
-void log_open_mesh_hint(const Scene& scene) {
+void log_open_mesh_hint(const Scene& scene, ReceiverContract receivers) {
+  if (receivers != ReceiverContract::anywhere) return;  // surfaces already widens them
   uint64_t open = 0;
   for (const MeshInfo& mesh : scene.meshes)
     if (mesh.kind == MeshKind::open) open += mesh.triangle_count;
@@ -160,7 +161,7 @@ Result<PreparedBuild> prepare(const BuildConfig& config) {
   if (!layout) return layout.error();
   spdlog::info("light frame: {}^2 texels of {:.6g} world units, {}^2 tiles of {}^2, depth range {:.6g}",
                resolution, frame->texel_size(), layout->tiles_per_side(), layout->tile_size(), frame->depth_range());
-  log_open_mesh_hint(*scene);
+  log_open_mesh_hint(*scene, config.receivers);
   auto scene_hash = hash_file(config.scene_path);
   if (!scene_hash) return scene_hash.error();
   const std::string identity = build_identity(config, *scene_hash, resolution, layout->tile_size()).dump();

@@ -284,6 +284,14 @@ TEST(Cli, DefaultBuildStoresDagmhRecordsUpAxisAndHintsAtOpenMeshes) {
   ASSERT_TRUE(map.ok());
   EXPECT_EQ((*map)->meta().methods, std::vector<store::Method>{store::Method::dagmh});
   EXPECT_EQ((*map)->meta().up_axis, "y");
+  // Under surfaces the open meshes already get intervals: no hint.
+  output.clear();
+  ASSERT_EQ(testing::run_command(testing::cli_path().string() + " build " + scene + " --up y -r 512 --tile 256 --out " +
+                                     (dir.path() / "surfaces").string() + " --receivers surfaces",
+                                 &output),
+            0)
+      << output;
+  EXPECT_EQ(output.find("open meshes"), std::string::npos) << output;
 }
 
 TEST(Cli, QueryPrintsLitAndGroundTruth) {
