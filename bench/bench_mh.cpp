@@ -6,11 +6,11 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <random>
 
 #include "builder/mh_builder.hpp"
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
+#include "bench/lookup_modes.hpp"
 #include "bench/synthetic_tile_cache.hpp"
 #include "builder/mmh_merger.hpp"
 #include "codec/mh_decoder.hpp"
@@ -83,30 +83,12 @@ void BM_Lookup(benchmark::State& state) {
   const uint32_t size = uint32_t(state.range(1));
   const Encoded& e = encoded(int(state.range(0)), size, state.range(2));
   const int mode = int(state.range(3));
-  std::mt19937 rng(unsigned(state.thread_index()) + 1);
-  std::vector<uint32_t> coords(1 << 16);
-  for (auto& c : coords) c = rng();
-  const uint32_t k = mode >= 3 ? uint32_t(mode) : 1;
-  uint64_t n = 0, i = 0, row = 0;
-  float sum = 0;
-  for (auto _ : state) {
-    if (mode == 0) {  // coherent: one row
-      const uint32_t v = uint32_t(row++ % size);
-      for (uint32_t u = 0; u < size; ++u) sum += e.view.lookup(u, v);
-      n += size;
-    } else {
-      for (int j = 0; j < 1024; ++j, i += 2) {
-        const uint32_t u = coords[i & 0xffff] % (size - k + 1), v = coords[(i + 1) & 0xffff] % (size - k + 1);
-        sum += mode == 1 ? e.view.lookup(u, v) : e.view.pcf_lit_fraction(u, v, k, 0.5f, 1e-4f);
-      }
-      n += 1024;
-    }
-  }
-  benchmark::DoNotOptimize(sum);
-  state.counters["lookups/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
-  static const char* modes[] = {"point row-order", "point random", "", "pcf3 random", "", "pcf5 random"};
+  const uint32_t k = st::bench::kernel_of_mode(mode);
+  st::bench::run_lookup_mode(
+      state, size, mode, [&](uint32_t u, uint32_t v) { return e.view.lookup(u, v); },
+      [&](uint32_t u, uint32_t v) { return e.view.pcf_lit_fraction(u, v, k, 0.5f, 1e-4f); });
   state.SetLabel(std::string(st::synthetic_kind_name(kSyntheticKinds[state.range(0)])) + (state.range(2) ? " mmh " : " mh ") +
-                 modes[mode]);
+                 st::bench::lookup_mode_name(mode));
 }
 
 }  // namespace

@@ -6,11 +6,11 @@
 #include <map>
 #include <memory>
 #include <mutex>
-#include <random>
 
 #include "builder/mh_builder.hpp"
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
+#include "bench/lookup_modes.hpp"
 #include "bench/synthetic_tile_cache.hpp"
 #include "builder/sst_encoder.hpp"
 #include "codec/mh_decoder.hpp"
@@ -72,34 +72,14 @@ void BM_Lookup(benchmark::State& state) {
   const Encoded& e = encoded(int(state.range(0)), size);
   const bool sst = state.range(2) == 0;
   const int mode = int(state.range(3));
-  std::mt19937 rng(unsigned(state.thread_index()) + 1);
-  std::vector<uint32_t> coords(1 << 16);
-  for (auto& c : coords) c = rng();
-  const uint32_t k = mode >= 3 ? uint32_t(mode) : 1;
-  uint64_t n = 0, i = 0, row = 0;
-  float sum = 0;
+  const uint32_t k = st::bench::kernel_of_mode(mode);
   auto point = [&](uint32_t u, uint32_t v) { return sst ? e.sst.lookup(u, v) : e.mh.lookup(u, v); };
   auto pcf = [&](uint32_t u, uint32_t v) {
     return sst ? float(e.sst.lit_count(u, v, k, k, 0.5f)) : float(e.mh.pcf_lit_count(u, v, k, k, 0.5f, 0.0f));
   };
-  for (auto _ : state) {
-    if (mode == 0) {
-      const uint32_t v = uint32_t(row++ % size);
-      for (uint32_t u = 0; u < size; ++u) sum += point(u, v);
-      n += size;
-    } else {
-      for (int j = 0; j < 1024; ++j, i += 2) {
-        const uint32_t u = coords[i & 0xffff] % (size - k + 1), v = coords[(i + 1) & 0xffff] % (size - k + 1);
-        sum += mode == 1 ? point(u, v) : pcf(u, v);
-      }
-      n += 1024;
-    }
-  }
-  benchmark::DoNotOptimize(sum);
-  state.counters["lookups/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
-  static const char* modes[] = {"point row-order", "point random", "", "pcf3 random", "", "pcf5 random"};
+  st::bench::run_lookup_mode(state, size, mode, point, pcf);
   state.SetLabel(std::string(st::synthetic_kind_name(kSyntheticKinds[state.range(0)])) + (sst ? " sst " : " mh ") +
-                 modes[mode]);
+                 st::bench::lookup_mode_name(mode));
 }
 
 }  // namespace

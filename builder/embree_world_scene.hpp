@@ -4,6 +4,8 @@
 // Thread safety: call before the scene is traced; the committed scene may then be traced concurrently.
 #pragma once
 
+#include <limits>
+
 #include "builder/embree_device.hpp"
 #include "builder/scene.hpp"
 
@@ -14,5 +16,20 @@ Vec3 scene_centre(const Scene& scene);
 // Adds every triangle of `scene` (robust traversal) and commits `target`.
 void commit_world_triangles(const EmbreeDevice& device, const EmbreeScene& target, const Scene& scene,
                             const Vec3& centre);
+// A ray for rtcIntersect1 from `origin` (Embree coordinates) along `direction`, unbounded, no hit yet.
+inline RTCRayHit world_ray(const Vec3& origin, const Vec3& direction) {
+  RTCRayHit ray{};
+  ray.ray.org_x = float(origin[0]);
+  ray.ray.org_y = float(origin[1]);
+  ray.ray.org_z = float(origin[2]);
+  ray.ray.dir_x = float(direction[0]);
+  ray.ray.dir_y = float(direction[1]);
+  ray.ray.dir_z = float(direction[2]);
+  ray.ray.tnear = 0;
+  ray.ray.tfar = std::numeric_limits<float>::infinity();
+  ray.ray.mask = 0xFFFFFFFFu;
+  ray.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  return ray;
+}
 
 }  // namespace shadowtiles

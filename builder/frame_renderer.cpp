@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <thread>
 
 #include "builder/embree_world_scene.hpp"
@@ -34,17 +33,7 @@ Result<FrameHits> FrameRenderer::trace(const CameraView& camera, unsigned thread
     for (uint32_t y = first_row; y < camera.height; y += step) {
       for (uint32_t x = 0; x < camera.width; ++x) {
         const Vec3 dir = basis->pixel_direction(x, y, camera.width, camera.height);
-        RTCRayHit ray{};
-        ray.ray.org_x = float(eye[0]);
-        ray.ray.org_y = float(eye[1]);
-        ray.ray.org_z = float(eye[2]);
-        ray.ray.dir_x = float(dir[0]);
-        ray.ray.dir_y = float(dir[1]);
-        ray.ray.dir_z = float(dir[2]);
-        ray.ray.tnear = 0;
-        ray.ray.tfar = std::numeric_limits<float>::infinity();
-        ray.ray.mask = 0xFFFFFFFFu;
-        ray.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        RTCRayHit ray = world_ray(eye, dir);
         rtcIntersect1(scene_.get(), &context, &ray);
         if (ray.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
         PrimaryHit& pixel = frame.pixels[size_t(y) * camera.width + x];

@@ -1,26 +1,73 @@
 // Format-specific attacks on one codec's parser, shared by the test_<format>_robustness files:
 // every single bit flip, random multi-byte edits, header fields set to extreme values, and the magic
-// and version checks. `try_parse(bytes)` parses (exact-size copy, so ASan sees overruns), exercises
-// an accepted view and returns whether it was accepted. The generic attacks every method gets through
-// decode_tile are in tests/test_codec_torture.cpp.
+// and version checks. `try_parse(bytes)` parses (exact-size copy, so ASan sees overruns: parse_exact),
+// exercises an accepted view and returns whether it was accepted. Also the small synthetic tiles the
+// payloads are encoded from (encode_sample_tiles) and the read paths of a hierarchy view (MH, DAG-MH). The generic attacks
+// every method gets through decode_tile are in tests/test_codec_torture.cpp.
 #pragma once
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <functional>
 #include <initializer_list>
 #include <random>
+#include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "builder/mh_synthetic.hpp"
 #include "common/result.hpp"
 
 namespace shadowtiles::testing {
 
 using Payloads = std::vector<std::vector<uint8_t>>;
 using TryParse = std::function<bool(const std::vector<uint8_t>&)>;
+
+// The payloads to attack: `encode(tile)` (a Payloads) of the synthetic tiles of every kind in `kinds`
+// at 1, 8 and 32 texels a side (seed: size + 17), kind by kind.
+template <typename Encode>
+Payloads encode_sample_tiles(std::initializer_list<MhSyntheticKind> kinds, Encode encode) {
+  Payloads out;
+  for (MhSyntheticKind kind : kinds)
+    for (uint32_t size : {1u, 8u, 32u})
+      for (std::vector<uint8_t>& p : encode(make_synthetic_tile(kind, size, size + 17))) out.push_back(std::move(p));
+  return out;
+}
+
+// Parses an exact-size heap copy of `bytes` (ASan sees any overrun) with `parse(span)`. A refusal
+// must be corrupt_data or unsupported; an accepted result goes to `exercise`. Returns whether it was
+// accepted.
+template <typename Parse, typename Exercise>
+bool parse_exact(const std::vector<uint8_t>& bytes, Parse parse, Exercise exercise) {
+  const std::vector<uint8_t> exact(bytes);
+  auto parsed = parse(std::span<const uint8_t>(exact.data(), exact.size()));
+  if (!parsed.ok()) {
+    EXPECT_TRUE(parsed.error().code == ErrorCode::corrupt_data || parsed.error().code == ErrorCode::unsupported)
+        << parsed.error().message;
+    return false;
+  }
+  exercise(*parsed);
+  return true;
+}
+
+// Every read path of an accepted hierarchy view (MH, DAG-MH): every texel at levels 0, 1, 3 and
+// `all_levels` must read finite; PCF boxes at both corners and over the whole tile stay in bounds.
+template <typename View>
+void exercise_hierarchy_view(const View& view, unsigned all_levels) {
+  const uint32_t n = view.size();
+  for (uint32_t v = 0; v < n; ++v)
+    for (uint32_t u = 0; u < n; ++u)
+      for (unsigned level : {0u, 1u, 3u, all_levels}) ASSERT_TRUE(std::isfinite(view.lookup(u, v, level)));
+  if (n >= 3) {
+    (void)view.pcf_lit_count(0, 0, 3, 3, 0.5f, 0.0f);
+    (void)view.pcf_lit_count(n - 3, n - 3, 3, 3, 0.5f, 0.0f);
+    (void)view.pcf_lit_count(0, 0, n, n, 0.5f, 0.0f);
+  }
+}
 
 // Flips every bit of every payload once; value bits may be accepted, structure bits must not all be.
 inline void expect_every_bit_flip_safe(const Payloads& payloads, const TryParse& try_parse) {

@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include "builder/build_job.hpp"
+#include "builder/receiver_sampler.hpp"
+#include "builder/scene_loader.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles::testing {
@@ -48,11 +50,23 @@ inline BuildConfig fzk_haus_config(const std::filesystem::path& store, uint32_t 
 }
 
 // A suite fixture holding one store built once for all its tests and the query points they share:
-// the derived suite's SetUpTestSuite builds into store() and fills points_; both are freed after the
-// suite. (One set of statics per derived suite.)
+// the derived suite's SetUpTestSuite builds into store() and fills points_ (build_fzk_haus_store does
+// both for the small fzk_haus store); both are freed after the suite. (One set of statics per derived
+// suite.)
 template <typename Suite>
 class BuiltStoreSuite : public ::testing::Test {
  protected:
+  // Builds fzk_haus_config(store(), resolution, every method) and keeps `receivers` surface
+  // receivers of the scene (seeded) as points_. Call with ASSERT_NO_FATAL_FAILURE.
+  static void build_fzk_haus_store(uint32_t resolution, size_t receivers, uint64_t seed) {
+    dir_ = new TempDir();
+    const BuildConfig config = fzk_haus_config(store(), resolution, kEveryMethod);
+    ASSERT_TRUE(run_build(config).ok());
+    auto scene = load_scene(config.scene_path, config.load);
+    ASSERT_TRUE(scene.ok());
+    points_ = new std::vector<Vec3>;
+    for (const Receiver& r : sample_receivers(*scene, receivers, seed)) points_->push_back(r.position);
+  }
   static void TearDownTestSuite() {
     delete points_;
     points_ = nullptr;

@@ -16,6 +16,7 @@
 #include "builder/mmh_merger.hpp"
 #include "codec/dagmh_decoder.hpp"
 #include "tests/mh_reference_intervals.hpp"
+#include "tests/parsed_payload.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -24,21 +25,10 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 
 constexpr auto& kKinds = kEveryMhSyntheticKind;
 
-struct Encoded {
-  std::vector<uint8_t> bytes;
-  DagMhTileView view;
-};
+using Encoded = testing::ParsedPayload<DagMhTileView>;
 
 Encoded encode_and_parse(const MhHierarchy& h, const DagMhOptions& o = {}) {
-  Encoded e;
-  auto bytes = encode_dagmh(h, o);
-  EXPECT_TRUE(bytes.ok()) << (bytes.ok() ? "" : bytes.error().message);
-  if (!bytes.ok()) return e;
-  e.bytes = std::move(*bytes);
-  auto view = DagMhTileView::parse(e.bytes);
-  EXPECT_TRUE(view.ok()) << (view.ok() ? "" : view.error().message);
-  if (view.ok()) e.view = *view;
-  return e;
+  return testing::parse_payload<DagMhTileView>(encode_dagmh(h, o));
 }
 
 uint64_t violations(const TileIntervals& tile, const DagMhTileView& view) {
@@ -50,8 +40,6 @@ uint64_t violations(const TileIntervals& tile, const DagMhTileView& view) {
     }
   return bad;
 }
-
-using testing::reference_intervals;
 
 using Param = std::tuple<MhSyntheticKind, uint32_t>;
 class DagMhLossless : public ::testing::TestWithParam<Param> {};
@@ -93,21 +81,10 @@ TEST(DagMh, CoarseLevelsInsideTheNodeIntervals) {
         DagMhOptions o;
         o.treelet_height = height;
         Encoded e = encode_and_parse(*build_mh(tile), o);
-        const auto ref = reference_intervals(tile);
-        const unsigned L = e.view.levels();
-        for (unsigned m = 0; m <= L; ++m) {
-          const uint32_t block = size >> m, side = 1u << m;
-          for (uint32_t by = 0; by < side; ++by)
-            for (uint32_t bx = 0; bx < side; ++bx) {
-              const float value = e.view.lookup(bx * block, by * block, m);
-              ASSERT_TRUE(ref[m][size_t(by) * side + bx].contains(value))
-                  << synthetic_kind_name(kind) << " size " << size << " level " << m;
-              for (uint32_t v = by * block; v < (by + 1) * block; ++v)
-                for (uint32_t u = bx * block; u < (bx + 1) * block; ++u) ASSERT_EQ(e.view.lookup(u, v, m), value);
-            }
-        }
-        for (uint32_t v = 0; v < size; ++v)
-          for (uint32_t u = 0; u < size; ++u) ASSERT_EQ(e.view.lookup(u, v, L + 5), e.view.lookup(u, v));
+        ASSERT_NO_FATAL_FAILURE(testing::expect_coarse_levels_inside_reference(
+            tile, e.view, false,
+            std::string(synthetic_kind_name(kind)) + " size " + std::to_string(size) + " height " +
+                std::to_string(height)));
       }
 }
 

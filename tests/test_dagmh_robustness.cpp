@@ -22,50 +22,36 @@ namespace {
 
 namespace F = dagmh_format;
 
-std::vector<std::vector<uint8_t>> sample_payloads() {
-  std::vector<std::vector<uint8_t>> out;
-  for (MhSyntheticKind kind : {MhSyntheticKind::steps, MhSyntheticKind::random_intervals,
-                               MhSyntheticKind::closed_plane, MhSyntheticKind::all_miss}) {
-    for (uint32_t size : {1u, 8u, 32u}) {
-      auto tree = build_mh(make_synthetic_tile(kind, size, size + 17));
-      for (unsigned height : {2u, 4u}) {
-        DagMhOptions o;
-        o.treelet_height = height;
-        o.chunk_size = height == 2 ? 16 : 32;
-        out.push_back(*encode_dagmh(*tree, o));
-      }
-    }
+// Treelet heights 2 and 4 (chunks of 16 and 32 values).
+testing::Payloads encode_heights(const TileIntervals& tile) {
+  auto tree = build_mh(tile);
+  testing::Payloads out;
+  for (unsigned height : {2u, 4u}) {
+    DagMhOptions o;
+    o.treelet_height = height;
+    o.chunk_size = height == 2 ? 16 : 32;
+    out.push_back(*encode_dagmh(*tree, o));
   }
   return out;
 }
 
-void exercise(const DagMhTileView& view) {
-  const uint32_t n = view.size();
-  for (uint32_t v = 0; v < n; ++v)
-    for (uint32_t u = 0; u < n; ++u)
-      for (unsigned level : {0u, 1u, 3u, kDagMhAllLevels}) ASSERT_TRUE(std::isfinite(view.lookup(u, v, level)));
-  if (n >= 3) {
-    (void)view.pcf_lit_count(0, 0, 3, 3, 0.5f, 0.0f);
-    (void)view.pcf_lit_count(n - 3, n - 3, 3, 3, 0.5f, 0.0f);
-    (void)view.pcf_lit_count(0, 0, n, n, 0.5f, 0.0f);
-  }
+testing::Payloads sample_payloads() {
+  return testing::encode_sample_tiles({MhSyntheticKind::steps, MhSyntheticKind::random_intervals,
+                                       MhSyntheticKind::closed_plane, MhSyntheticKind::all_miss},
+                                      encode_heights);
 }
 
+// Accepted only when every skip level parses it.
 bool try_parse(const std::vector<uint8_t>& bytes) {
-  std::vector<uint8_t> exact(bytes);
-  bool accepted = false;
   for (unsigned skip : {6u, 2u, 0u}) {
     DagMhParseOptions o;
     o.skip_level = skip;
-    auto view = DagMhTileView::parse(std::span<const uint8_t>(exact.data(), exact.size()), o);
-    if (!view.ok()) {
-      EXPECT_TRUE(view.error().code == ErrorCode::corrupt_data || view.error().code == ErrorCode::unsupported);
+    if (!testing::parse_exact(
+            bytes, [&](std::span<const uint8_t> exact) { return DagMhTileView::parse(exact, o); },
+            [](const DagMhTileView& view) { testing::exercise_hierarchy_view(view, kDagMhAllLevels); }))
       return false;
-    }
-    exercise(*view);
-    accepted = true;
   }
-  return accepted;
+  return true;
 }
 
 TEST(DagMhRobustness, EveryTruncationIsAnError) {

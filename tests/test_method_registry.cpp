@@ -13,7 +13,6 @@
 #include "builder/method_encoders.hpp"
 #include "builder/receiver_sampler.hpp"
 #include "builder/scene_loader.hpp"
-#include "builder/store_verifier.hpp"
 #include "builder/tile_encoder.hpp"
 #include "client/shadow_map.hpp"
 #include "codec/method_decoders.hpp"
@@ -21,7 +20,9 @@
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
 #include "store/tile_key.hpp"
+#include "tests/scene_build_config.hpp"
 #include "tests/testing_support.hpp"
+#include "tests/verified_build.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -143,33 +144,19 @@ TEST(MethodRegistry, ToyMethodNamedAtTheOuterInterfaces) {
 TEST(MethodRegistry, ToyMethodBuildsStoresDecodesAndVerifiesOnARealScene) {
   register_toy_method();
   testing::TempDir dir;
-  BuildConfig config;
-  config.scene_path = testing::shared_scene("fzk_haus/fzk_haus.obj");
-  config.store_path = dir.path() / "s";
-  config.resolution = 256;
-  config.tile_size = 64;
-  config.load.up = UpAxis::y;
-  config.light_direction = *light_direction_from_sun(135, 40, UpAxis::y);
-  config.methods = {Method::raw, kToy};
-  auto summary = run_build(config);
-  ASSERT_TRUE(summary.ok()) << summary.error().message;
-  EXPECT_GT(summary->stats["bytes_by_method"]["toy"].get<uint64_t>(), 0u);
+  const BuildConfig config =
+      testing::shared_scene_config({"fzk_haus/fzk_haus.obj", UpAxis::y, false}, dir.path() / "s", 256, 64,
+                                   {Method::raw, kToy}, 135, 40);
+  // Every texel decodes inside its interval: verify re-renders the intervals and checks all of them.
+  auto verified = testing::build_and_verify_every_texel(config, {Method::raw, kToy});
+  ASSERT_TRUE(verified.has_value());
+  EXPECT_GT(verified->stats["bytes_by_method"]["toy"].get<uint64_t>(), 0u);
 
-  auto map = ShadowMap::open(dir.path() / "s");
+  auto map = ShadowMap::open(config.store_path);
   ASSERT_TRUE(map.ok()) << map.error().message;
   ASSERT_TRUE((*map)->meta().has_method(kToy));
-
-  // Every texel decodes inside its interval: verify re-renders the intervals and checks all of them.
-  LoadOptions load;
-  load.up = UpAxis::y;
-  auto scene = load_scene(config.scene_path, load);
+  auto scene = load_scene(config.scene_path, config.load);
   ASSERT_TRUE(scene.ok());
-  auto report = verify_store(**map, *scene, {Method::raw, kToy});
-  ASSERT_TRUE(report.ok()) << report.error().message;
-  const MethodVerification& toy = report->methods.at(kToy);
-  EXPECT_EQ(toy.texels, uint64_t(256) * 256);
-  EXPECT_EQ(toy.outside, 0u) << toy.first_violation;
-  EXPECT_EQ(toy.wrong_answers, 0u);
 
   // Queries through ShadowMap: on surface receivers the toy answers as raw does (both lossless).
   auto receivers = sample_receivers(*scene, 2000, 7);

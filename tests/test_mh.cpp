@@ -13,6 +13,7 @@
 #include "builder/mh_verify.hpp"
 #include "codec/mh_decoder.hpp"
 #include "tests/mh_reference_intervals.hpp"
+#include "tests/parsed_payload.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -21,22 +22,13 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 
 constexpr auto& kKinds = kEveryMhSyntheticKind;
 
-struct Encoded {
-  std::vector<uint8_t> bytes;
-  MhTileView view;
-};
+using Encoded = testing::ParsedPayload<MhTileView>;
 
 Encoded encode_and_parse(const TileIntervals& tile, MhConstruction construction, MhEncodeOptions encode = {}) {
   auto h = build_mh(tile, {construction});
   EXPECT_TRUE(h.ok()) << (h.ok() ? "" : h.error().message);
-  Encoded e;
-  auto bytes = encode_mh(*h, encode);
-  EXPECT_TRUE(bytes.ok());
-  e.bytes = std::move(*bytes);
-  auto view = MhTileView::parse(e.bytes);
-  EXPECT_TRUE(view.ok()) << (view.ok() ? "" : view.error().message);
-  if (view.ok()) e.view = *view;
-  return e;
+  if (!h.ok()) return {};
+  return testing::parse_payload<MhTileView>(encode_mh(*h, encode));
 }
 
 using testing::reference_intervals;
@@ -75,27 +67,8 @@ TEST(MhCoarseLevels, EachLevelIsACompleteMapExactSomewhereInEachBlock) {
     for (uint32_t size : {1u, 2u, 16u, 64u}) {
       const TileIntervals tile = make_synthetic_tile(kind, size, 77 + size);
       Encoded e = encode_and_parse(tile, MhConstruction::bottom_up);
-      const auto ref = reference_intervals(tile);
-      const unsigned L = e.view.levels();
-      for (unsigned m = 0; m <= L; ++m) {
-        const uint32_t block = size >> m, side = 1u << m;
-        for (uint32_t by = 0; by < side; ++by)
-          for (uint32_t bx = 0; bx < side; ++bx) {
-            const float value = e.view.lookup(bx * block, by * block, m);
-            EXPECT_TRUE(ref[m][size_t(by) * side + bx].contains(value))
-                << synthetic_kind_name(kind) << " size " << size << " level " << m;
-            bool exact_somewhere = false;
-            for (uint32_t v = by * block; v < (by + 1) * block; ++v)
-              for (uint32_t u = bx * block; u < (bx + 1) * block; ++u) {
-                ASSERT_EQ(e.view.lookup(u, v, m), value);
-                exact_somewhere |= tile.at(u, v).contains(value);
-              }
-            EXPECT_TRUE(exact_somewhere) << synthetic_kind_name(kind) << " size " << size << " level " << m;
-          }
-      }
-      // Levels past the last one are the full map.
-      for (uint32_t v = 0; v < size; ++v)
-        for (uint32_t u = 0; u < size; ++u) ASSERT_EQ(e.view.lookup(u, v, L + 5), e.view.lookup(u, v));
+      ASSERT_NO_FATAL_FAILURE(testing::expect_coarse_levels_inside_reference(
+          tile, e.view, true, std::string(synthetic_kind_name(kind)) + " size " + std::to_string(size)));
     }
   }
 }

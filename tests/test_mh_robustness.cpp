@@ -20,46 +20,26 @@
 namespace shadowtiles {
 namespace {
 
-std::vector<std::vector<uint8_t>> sample_payloads() {
-  std::vector<std::vector<uint8_t>> out;
-  for (MhSyntheticKind kind : {MhSyntheticKind::steps, MhSyntheticKind::random_intervals,
-                               MhSyntheticKind::boxes_and_misses, MhSyntheticKind::all_miss}) {
-    for (uint32_t size : {1u, 8u, 32u}) {
-      auto tree = build_mh(make_synthetic_tile(kind, size, size + 17));
-      auto merged = merge_mmh(*tree);
-      out.push_back(*encode_mh(*tree));
-      out.push_back(*encode_mh(*merged));
-      MhEncodeOptions skip;
-      skip.embed_skip_list = true;
-      skip.skip_level = 2;
-      out.push_back(*encode_mh(*merged, skip));
-    }
-  }
-  return out;
+// MH, MMH and MMH with a skip list.
+testing::Payloads encode_all(const TileIntervals& tile) {
+  auto tree = build_mh(tile);
+  auto merged = merge_mmh(*tree);
+  MhEncodeOptions skip;
+  skip.embed_skip_list = true;
+  skip.skip_level = 2;
+  return {*encode_mh(*tree), *encode_mh(*merged), *encode_mh(*merged, skip)};
 }
 
-// Exercises every read path of an accepted view; values must be finite.
-void exercise(const MhTileView& view) {
-  const uint32_t n = view.size();
-  for (uint32_t v = 0; v < n; ++v)
-    for (uint32_t u = 0; u < n; ++u)
-      for (unsigned level : {0u, 1u, 3u, kMhAllLevels}) ASSERT_TRUE(std::isfinite(view.lookup(u, v, level)));
-  if (n >= 3) {
-    (void)view.pcf_lit_fraction(0, 0, 3, 0.5f, 0.0f);
-    (void)view.pcf_lit_fraction(n - 3, n - 3, 3, 0.5f, 0.0f);
-    (void)view.pcf_lit_fraction(0, 0, n, 0.5f, 0.0f);
-  }
+testing::Payloads sample_payloads() {
+  return testing::encode_sample_tiles({MhSyntheticKind::steps, MhSyntheticKind::random_intervals,
+                                       MhSyntheticKind::boxes_and_misses, MhSyntheticKind::all_miss},
+                                      encode_all);
 }
 
 bool try_parse(const std::vector<uint8_t>& bytes) {
-  std::vector<uint8_t> exact(bytes);  // exact-size heap buffer: ASan sees any overrun
-  auto view = MhTileView::parse(std::span<const uint8_t>(exact.data(), exact.size()));
-  if (!view.ok()) {
-    EXPECT_TRUE(view.error().code == ErrorCode::corrupt_data || view.error().code == ErrorCode::unsupported);
-    return false;
-  }
-  exercise(*view);
-  return true;
+  return testing::parse_exact(
+      bytes, [](std::span<const uint8_t> exact) { return MhTileView::parse(exact); },
+      [](const MhTileView& view) { testing::exercise_hierarchy_view(view, kMhAllLevels); });
 }
 
 TEST(MhRobustness, EverySingleBitFlipIsSafe) {

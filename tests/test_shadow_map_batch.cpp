@@ -21,16 +21,10 @@ namespace {
 class ShadowMapBatchTest : public testing::BuiltStoreSuite<ShadowMapBatchTest> {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new testing::TempDir();
-    BuildConfig config = testing::fzk_haus_config(dir_->path() / "store", 512, testing::kEveryMethod);
-    ASSERT_TRUE(run_build(config).ok());
-    auto scene = load_scene(config.scene_path, config.load);
-    ASSERT_TRUE(scene.ok());
-    auto map = ShadowMap::open(config.store_path);
+    ASSERT_NO_FATAL_FAILURE(build_fzk_haus_store(512, 1500, 3));
+    auto map = ShadowMap::open(store());
     ASSERT_TRUE(map.ok());
     const ShadowMap& m = **map;
-    points_ = new std::vector<Vec3>;
-    for (const Receiver& r : sample_receivers(*scene, 1500, 3)) points_->push_back(r.position);
     // Texels on and beside every tile border (kernels there cross into the neighbours), on the
     // stored surface and just above it, and points off the map.
     std::mt19937 rng(11);

@@ -23,15 +23,7 @@ constexpr unsigned kThreads = 8;
 
 class ShadowMapConcurrencyTest : public testing::BuiltStoreSuite<ShadowMapConcurrencyTest> {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = new testing::TempDir();
-    BuildConfig config = testing::fzk_haus_config(dir_->path() / "store", 512, testing::kEveryMethod);
-    ASSERT_TRUE(run_build(config).ok());
-    auto scene = load_scene(config.scene_path, config.load);
-    ASSERT_TRUE(scene.ok());
-    points_ = new std::vector<Vec3>;
-    for (const Receiver& r : sample_receivers(*scene, 2000, 5)) points_->push_back(r.position);
-  }
+  static void SetUpTestSuite() { ASSERT_NO_FATAL_FAILURE(build_fzk_haus_store(512, 2000, 5)); }
 };
 
 // Answer of one query as a comparable number: lit (0/1) for kernel 1, the PCF fraction otherwise;

@@ -14,29 +14,15 @@
 #include "codec/decoded_tile.hpp"
 #include "codec/sst_format.hpp"
 #include "codec/sst_tile_view.hpp"
+#include "tests/parsed_payload.hpp"
 
 namespace shadowtiles {
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-struct Encoded {
-  std::vector<uint8_t> payload;
-  SstTileView view;
-};
-
-// The payload lives in the returned struct; the view points into it (vector buffers do not move).
-std::unique_ptr<Encoded> encode_and_parse(const TileIntervals& tile) {
-  auto bytes = encode_sst_tile(tile);
-  EXPECT_TRUE(bytes.ok()) << bytes.error().message;
-  if (!bytes.ok()) return nullptr;
-  auto out = std::make_unique<Encoded>();
-  out->payload = std::move(*bytes);
-  auto view = SstTileView::parse(out->payload);
-  EXPECT_TRUE(view.ok()) << view.error().message;
-  if (!view.ok()) return nullptr;
-  out->view = std::move(*view);
-  return out;
+testing::ParsedPayload<SstTileView> encode_and_parse(const TileIntervals& tile) {
+  return testing::parse_payload<SstTileView>(encode_sst_tile(tile));
 }
 
 uint64_t count_outside(const TileIntervals& tile, const SstTileView& view) {
@@ -66,9 +52,9 @@ TEST(Sst, SyntheticTilesAreLosslessAtEverySize) {
     for (uint32_t size : {1u, 2u, 8u, 64u, 256u}) {
       const TileIntervals tile = make_synthetic_tile(kind, size, 7 * size + 3);
       auto encoded = encode_and_parse(tile);
-      ASSERT_NE(encoded, nullptr);
-      EXPECT_EQ(count_outside(tile, encoded->view), 0u) << synthetic_kind_name(kind) << " " << size;
-      const SstStats& s = encoded->view.stats();
+      ASSERT_TRUE(encoded.ok);
+      EXPECT_EQ(count_outside(tile, encoded.view), 0u) << synthetic_kind_name(kind) << " " << size;
+      const SstStats& s = encoded.view.stats();
       EXPECT_EQ(s.one_texels + s.constant_texels + s.plane_texels + s.dense_texels, uint64_t(size) * size);
     }
   }
@@ -91,12 +77,12 @@ TEST(Sst, GenericDecoderServesTheMethod) {
 TEST(Sst, AllMissTileIsOneLeafPerBlock) {
   const TileIntervals tile = make_synthetic_tile(MhSyntheticKind::all_miss, 512, 1);
   auto encoded = encode_and_parse(tile);
-  ASSERT_NE(encoded, nullptr);
-  const SstStats& s = encoded->view.stats();
+  ASSERT_TRUE(encoded.ok);
+  const SstStats& s = encoded.view.stats();
   EXPECT_EQ(s.blocks, 16u);
   EXPECT_EQ(s.one_leaves, 16u);
-  EXPECT_EQ(encoded->payload.size(), sst_format::kHeaderBytes + 16 * 4 + 16 * 2);
-  EXPECT_EQ(encoded->view.lookup(17, 300), 1.0f);
+  EXPECT_EQ(encoded.bytes.size(), sst_format::kHeaderBytes + 16 * 4 + 16 * 2);
+  EXPECT_EQ(encoded.view.lookup(17, 300), 1.0f);
 }
 
 TEST(Sst, WidePlaneIsOnePlanePerBlock) {
@@ -104,11 +90,11 @@ TEST(Sst, WidePlaneIsOnePlanePerBlock) {
   for (auto [b, c] : {std::pair{2.4e-4, -1.1e-4}, std::pair{-3e-3, 5e-3}, std::pair{1e-7, 0.0}}) {
     const TileIntervals tile = plane_tile(256, 0.4, b, c, 1e-4f, 1e-4f);
     auto encoded = encode_and_parse(tile);
-    ASSERT_NE(encoded, nullptr);
-    const SstStats& s = encoded->view.stats();
+    ASSERT_TRUE(encoded.ok);
+    const SstStats& s = encoded.view.stats();
     EXPECT_EQ(s.plane_leaves + s.constant_leaves, 4u) << "b=" << b << " c=" << c;
     EXPECT_EQ(s.internal_nodes, 0u);
-    EXPECT_EQ(count_outside(tile, encoded->view), 0u);
+    EXPECT_EQ(count_outside(tile, encoded.view), 0u);
   }
 }
 
@@ -138,8 +124,8 @@ TEST(Sst, IntervalsAFewUlpsWideStayLossless) {
       }
     }
     auto encoded = encode_and_parse(tile);
-    ASSERT_NE(encoded, nullptr);
-    EXPECT_EQ(count_outside(tile, encoded->view), 0u) << ulps << " ulps";
+    ASSERT_TRUE(encoded.ok);
+    EXPECT_EQ(count_outside(tile, encoded.view), 0u) << ulps << " ulps";
   }
 }
 
@@ -165,10 +151,10 @@ TEST(Sst, FitterNeverReturnsAPlaneThatFails) {
 TEST(Sst, StepsUseConstantsAndPlanes) {
   const TileIntervals tile = make_synthetic_tile(MhSyntheticKind::steps, 256, 3);
   auto encoded = encode_and_parse(tile);
-  ASSERT_NE(encoded, nullptr);
-  const SstStats& s = encoded->view.stats();
+  ASSERT_TRUE(encoded.ok);
+  const SstStats& s = encoded.view.stats();
   EXPECT_GT(s.constant_leaves + s.plane_leaves, 0u);
-  EXPECT_LT(encoded->payload.size(), tile.texels.size() * 4) << "smaller than a float map";
+  EXPECT_LT(encoded.bytes.size(), tile.texels.size() * 4) << "smaller than a float map";
 }
 
 TEST(Sst, LitCountEqualsPerTexelCounting) {
@@ -177,8 +163,8 @@ TEST(Sst, LitCountEqualsPerTexelCounting) {
     const uint32_t size = 256;
     const TileIntervals tile = make_synthetic_tile(kind, size, 21);
     auto encoded = encode_and_parse(tile);
-    ASSERT_NE(encoded, nullptr);
-    const SstTileView& view = encoded->view;
+    ASSERT_TRUE(encoded.ok);
+    const SstTileView& view = encoded.view;
     std::mt19937 rng(4);
     for (int trial = 0; trial < 400; ++trial) {
       const uint32_t kw = 1 + rng() % (trial % 10 == 0 ? 200 : 9), kh = 1 + rng() % (trial % 10 == 0 ? 200 : 9);
@@ -199,8 +185,8 @@ TEST(Sst, LitCountEqualsPerTexelCounting) {
 TEST(Sst, CoarseLevelsAreDecimations) {
   const TileIntervals tile = make_synthetic_tile(MhSyntheticKind::boxes_and_misses, 256, 8);
   auto encoded = encode_and_parse(tile);
-  ASSERT_NE(encoded, nullptr);
-  const SstTileView& view = encoded->view;
+  ASSERT_TRUE(encoded.ok);
+  const SstTileView& view = encoded.view;
   ASSERT_EQ(view.levels(), 8u);
   std::mt19937 rng(1);
   for (int trial = 0; trial < 2000; ++trial) {

@@ -18,38 +18,36 @@ namespace shadowtiles {
 namespace {
 
 struct SceneCase {
-  const char* file;
-  UpAxis up;
-  bool heightfield;
+  testing::SharedSceneCase scene;
   double sun_elevation;
 };
 
 class SstAllScenesAt4096 : public ::testing::TestWithParam<SceneCase> {};
 
 TEST_P(SstAllScenesAt4096, EveryTexelInsideItsInterval) {
-  const SceneCase& scene = GetParam();
+  const SceneCase& c = GetParam();
   constexpr uint32_t kResolution = 4096, kTile = 1024;
   const std::vector<store::Method> methods{store::Method::mh, store::Method::sst};
   testing::TempDir dir;
-  const BuildConfig config = testing::shared_scene_config({scene.file, scene.up, scene.heightfield}, dir.path() / "s",
-                                                         kResolution, kTile, methods, 135, scene.sun_elevation);
+  const BuildConfig config = testing::shared_scene_config(c.scene, dir.path() / "s", kResolution, kTile, methods, 135,
+                                                         c.sun_elevation);
   auto verified = testing::build_and_verify_every_texel(config, methods);
   ASSERT_TRUE(verified.has_value());
   const auto& bytes = verified->stats["bytes_by_method"];
-  std::printf("[ figures  ] %s 4096^2: sst %llu bytes, mh %llu bytes, %llu texels checked\n", scene.file,
+  std::printf("[ figures  ] %s 4096^2: sst %llu bytes, mh %llu bytes, %llu texels checked\n", c.scene.file,
               (unsigned long long)bytes["sst"].get<uint64_t>(), (unsigned long long)bytes["mh"].get<uint64_t>(),
               (unsigned long long)verified->texels);
 }
 
 INSTANTIATE_TEST_SUITE_P(
     SharedScenes, SstAllScenesAt4096,
-    ::testing::Values(SceneCase{"bunny/stanford-bunny.obj", UpAxis::y, false, 45},
-                      SceneCase{"nefertiti/nefertiti.obj", UpAxis::z, false, 45},
-                      SceneCase{"fzk_haus/fzk_haus.obj", UpAxis::y, false, 45},
-                      SceneCase{"dragon_res2/dragon_vrip_res2.ply", UpAxis::y, false, 45},
-                      SceneCase{"terragen/RealisticTerrain.ply", UpAxis::z, true, 30},
-                      SceneCase{"oahu/oahu_w158n21.ply", UpAxis::z, true, 30},
-                      SceneCase{"honolulu_airport/honolulu_airport_harbour.ply", UpAxis::z, false, 30}));
+    ::testing::Values(SceneCase{{"bunny/stanford-bunny.obj", UpAxis::y, false}, 45},
+                      SceneCase{{"nefertiti/nefertiti.obj", UpAxis::z, false}, 45},
+                      SceneCase{{"fzk_haus/fzk_haus.obj", UpAxis::y, false}, 45},
+                      SceneCase{{"dragon_res2/dragon_vrip_res2.ply", UpAxis::y, false}, 45},
+                      SceneCase{{"terragen/RealisticTerrain.ply", UpAxis::z, true}, 30},
+                      SceneCase{{"oahu/oahu_w158n21.ply", UpAxis::z, true}, 30},
+                      SceneCase{{"honolulu_airport/honolulu_airport_harbour.ply", UpAxis::z, false}, 30}));
 
 }  // namespace
 }  // namespace shadowtiles

@@ -15,6 +15,7 @@
 #include "codec/decoded_tile.hpp"
 #include "codec/sst_format.hpp"
 #include "codec/sst_tile_view.hpp"
+#include "tests/payload_attacks.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -23,13 +24,12 @@ namespace F = sst_format;
 
 // Small tiles holding every node kind (one, constant, plane, dense, internal) and, at 256, several
 // blocks.
-std::vector<std::vector<uint8_t>> sample_payloads() {
-  std::vector<std::vector<uint8_t>> out;
-  for (MhSyntheticKind kind : {MhSyntheticKind::steps, MhSyntheticKind::random_intervals,
-                               MhSyntheticKind::closed_plane, MhSyntheticKind::boxes_and_misses}) {
-    for (uint32_t size : {1u, 8u, 32u}) out.push_back(*encode_sst_tile(make_synthetic_tile(kind, size, size + 17)));
-  }
-  return out;
+testing::Payloads sample_payloads() {
+  return testing::encode_sample_tiles({MhSyntheticKind::steps, MhSyntheticKind::random_intervals,
+                                       MhSyntheticKind::closed_plane, MhSyntheticKind::boxes_and_misses},
+                                      [](const TileIntervals& tile) {
+                                        return testing::Payloads{*encode_sst_tile(tile)};
+                                      });
 }
 
 std::vector<uint8_t> multi_block_payload() {
@@ -51,14 +51,9 @@ void exercise(const DecodedTile& tile) {
 }
 
 bool try_decode(const std::vector<uint8_t>& bytes) {
-  std::vector<uint8_t> exact(bytes);
-  auto tile = decode_tile(store::Method::sst, std::span<const uint8_t>(exact.data(), exact.size()));
-  if (!tile.ok()) {
-    EXPECT_TRUE(tile.error().code == ErrorCode::corrupt_data || tile.error().code == ErrorCode::unsupported);
-    return false;
-  }
-  exercise(**tile);
-  return true;
+  return testing::parse_exact(
+      bytes, [](std::span<const uint8_t> exact) { return decode_tile(store::Method::sst, exact); },
+      [](const std::shared_ptr<const DecodedTile>& tile) { exercise(*tile); });
 }
 
 void put_u32(std::vector<uint8_t>& p, size_t at, uint32_t x) { std::memcpy(p.data() + at, &x, 4); }

@@ -164,6 +164,16 @@ class StreamingClientTest : public ::testing::Test {
 TempDir* StreamingClientTest::dir_ = nullptr;
 std::vector<Vec3>* StreamingClientTest::points_ = nullptr;
 
+// The stored values `map` answers for `points` (every query must answer).
+void query_values(const ShadowMap& map, store::Method method, std::span<const Vec3> points, std::vector<float>& values) {
+  values.clear();
+  for (const Vec3& p : points) {
+    auto answer = map.query(p, method);
+    ASSERT_TRUE(answer.ok()) << answer.error().message;
+    values.push_back(answer->value);
+  }
+}
+
 // The server's batch answers (JSON: doubles survive exactly) for `points`.
 std::vector<double> server_answers(const std::string& url, const std::vector<Vec3>& points, store::Method method,
                                    unsigned pcf) {
@@ -388,17 +398,13 @@ TEST_F(StreamingClientTest, DiskCacheRevalidatesWithETagsAndServesOffline) {
   options.http = fast_retries();
   options.http.disk_cache_dir = cache_dir.path();
   const store::Method method = store::Method::mh;
-  const size_t count = 2000;
-  std::vector<ShadowAnswer> first;
+  const std::span<const Vec3> points = std::span<const Vec3>(*points_).first(2000);
+  std::vector<float> first, again;
   uint64_t first_fetched = 0;
   {
     auto remote = open_shadow_map(running.url(), options);
     ASSERT_TRUE(remote.ok()) << remote.error().message;
-    for (size_t i = 0; i < count; ++i) {
-      auto answer = (*remote)->query((*points_)[i], method);
-      ASSERT_TRUE(answer.ok()) << answer.error().message;
-      first.push_back(*answer);
-    }
+    ASSERT_NO_FATAL_FAILURE(query_values(**remote, method, points, first));
     first_fetched = http_source(**remote)->stats().tiles_fetched;
     EXPECT_GT(http_source(**remote)->stats().bytes_received, 0u);
   }
@@ -407,11 +413,8 @@ TEST_F(StreamingClientTest, DiskCacheRevalidatesWithETagsAndServesOffline) {
     // A second run revalidates: 304s, no tile bytes moved, same answers.
     auto remote = open_shadow_map(running.url(), options);
     ASSERT_TRUE(remote.ok()) << remote.error().message;
-    for (size_t i = 0; i < count; ++i) {
-      auto answer = (*remote)->query((*points_)[i], method);
-      ASSERT_TRUE(answer.ok()) << answer.error().message;
-      EXPECT_EQ(answer->value, first[i].value);
-    }
+    ASSERT_NO_FATAL_FAILURE(query_values(**remote, method, points, again));
+    EXPECT_EQ(again, first);
     const HttpFetchStats stats = http_source(**remote)->stats();
     EXPECT_GT(stats.not_modified, 0u);
     EXPECT_EQ(stats.tiles_fetched, 0u);
@@ -433,11 +436,8 @@ TEST_F(StreamingClientTest, DiskCacheRevalidatesWithETagsAndServesOffline) {
   {
     auto remote = open_shadow_map(running.url(), options);
     ASSERT_TRUE(remote.ok()) << remote.error().message;
-    for (size_t i = 0; i < count; ++i) {
-      auto answer = (*remote)->query((*points_)[i], method);
-      ASSERT_TRUE(answer.ok()) << answer.error().message;
-      EXPECT_EQ(answer->value, first[i].value);
-    }
+    ASSERT_NO_FATAL_FAILURE(query_values(**remote, method, points, again));
+    EXPECT_EQ(again, first);
     EXPECT_LE(http_source(**remote)->stats().tiles_fetched, 1u);
     EXPECT_EQ(http_source(**remote)->stats().corrupt_refetches, 0u);
   }
@@ -446,11 +446,8 @@ TEST_F(StreamingClientTest, DiskCacheRevalidatesWithETagsAndServesOffline) {
   auto offline_source = open_shadow_map(running.url(), options);
   ASSERT_TRUE(offline_source.ok());
   running.stop();
-  for (size_t i = 0; i < count; ++i) {
-    auto answer = (*offline_source)->query((*points_)[i], method);
-    ASSERT_TRUE(answer.ok()) << answer.error().message;
-    EXPECT_EQ(answer->value, first[i].value);
-  }
+  ASSERT_NO_FATAL_FAILURE(query_values(**offline_source, method, points, again));
+  EXPECT_EQ(again, first);
 }
 
 TEST_F(StreamingClientTest, DiskCacheStaysWithinItsBudget) {

@@ -11,6 +11,7 @@
 #include "store/lmdb_store.hpp"
 #include "store/tile_key.hpp"
 #include "store/tile_preview.hpp"
+#include "tests/scene_build_config.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles {
@@ -58,15 +59,8 @@ TEST(TilePreviewRecord, RefusesDamageAndAnotherMethod) {
 
 TEST(TilePreviewBuild, EveryStoredTileHasAMatchingPreview) {
   testing::TempDir dir;
-  BuildConfig config;
-  config.scene_path = testing::shared_scene("fzk_haus/fzk_haus.obj");
-  config.store_path = dir.path() / "s";
-  config.resolution = 1024;
-  config.tile_size = 256;
-  config.load.up = UpAxis::y;
-  config.light_direction = *light_direction_from_sun(135, 45, UpAxis::y);
-  config.methods = {store::Method::raw, store::Method::mh, store::Method::mmh, store::Method::dagmh,
-                    store::Method::cpvs, store::Method::sst};
+  const BuildConfig config = testing::shared_scene_config({"fzk_haus/fzk_haus.obj", UpAxis::y, false},
+                                                         dir.path() / "s", 1024, 256, testing::kEveryMethod, 135, 45);
   auto summary = run_build(config);
   ASSERT_TRUE(summary.ok()) << summary.error().message;
   EXPECT_GT(summary->stats["preview_bytes"].get<uint64_t>(), 0u);

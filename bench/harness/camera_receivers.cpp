@@ -1,7 +1,8 @@
 #include "bench/harness/camera_receivers.hpp"
 
 #include <cmath>
-#include <limits>
+
+#include "builder/embree_world_scene.hpp"
 
 namespace shadowtiles::bench {
 namespace {
@@ -23,11 +24,9 @@ std::vector<Receiver> camera_receivers(const EmbreeDevice& device, const Scene& 
   // The camera looks along the direction a sun at (azimuth, elevation) would shine.
   auto view = light_direction_from_sun(camera.azimuth, camera.elevation, up);
   if (!view) return receivers;
-  Vec3 centre, extent;
-  for (int i = 0; i < 3; ++i) {
-    centre[i] = 0.5 * (scene.bounds.min[i] + scene.bounds.max[i]);
-    extent[i] = scene.bounds.max[i] - scene.bounds.min[i];
-  }
+  const Vec3 centre = scene_centre(scene);
+  Vec3 extent;
+  for (int i = 0; i < 3; ++i) extent[i] = scene.bounds.max[i] - scene.bounds.min[i];
   const double radius = 0.5 * std::sqrt(extent[0] * extent[0] + extent[1] * extent[1] + extent[2] * extent[2]);
   const Vec3 forward = normalized(*view);
   // Camera-relative coordinates (origin at the scene centre) keep float precision in Embree.
@@ -38,20 +37,7 @@ std::vector<Receiver> camera_receivers(const EmbreeDevice& device, const Scene& 
   const Vec3 cam_up = cross(right, forward);
 
   EmbreeScene rtc(rtcNewScene(device.get()));
-  rtcSetSceneFlags(rtc.get(), RTC_SCENE_FLAG_ROBUST);
-  RTCGeometry geometry = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                               3 * sizeof(float), scene.vertices.size()));
-  for (size_t v = 0; v < scene.vertices.size(); ++v)
-    for (int i = 0; i < 3; ++i) vertices[3 * v + i] = float(scene.vertices[v][i] - centre[i]);
-  auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                 3 * sizeof(uint32_t), scene.triangles.size()));
-  for (size_t t = 0; t < scene.triangles.size(); ++t)
-    for (int i = 0; i < 3; ++i) indices[3 * t + i] = scene.triangles[t][i];
-  rtcCommitGeometry(geometry);
-  rtcAttachGeometry(rtc.get(), geometry);
-  rtcReleaseGeometry(geometry);
-  rtcCommitScene(rtc.get());
+  commit_world_triangles(device, rtc, scene, centre);
 
   const double tan_half = std::tan(camera.fov * M_PI / 360.0);
   const double aspect = double(camera.width) / double(camera.height);
@@ -64,17 +50,7 @@ std::vector<Receiver> camera_receivers(const EmbreeDevice& device, const Scene& 
       const double sy = (1.0 - 2.0 * (y + 0.5) / camera.height) * tan_half;
       Vec3 dir = normalized({forward[0] + sx * right[0] + sy * cam_up[0], forward[1] + sx * right[1] + sy * cam_up[1],
                              forward[2] + sx * right[2] + sy * cam_up[2]});
-      RTCRayHit hit{};
-      hit.ray.org_x = float(eye[0]);
-      hit.ray.org_y = float(eye[1]);
-      hit.ray.org_z = float(eye[2]);
-      hit.ray.dir_x = float(dir[0]);
-      hit.ray.dir_y = float(dir[1]);
-      hit.ray.dir_z = float(dir[2]);
-      hit.ray.tnear = 0;
-      hit.ray.tfar = std::numeric_limits<float>::infinity();
-      hit.ray.mask = 0xFFFFFFFFu;
-      hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      RTCRayHit hit = world_ray(eye, dir);
       rtcIntersect1(rtc.get(), &context, &hit);
       if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
       const double t = hit.ray.tfar;

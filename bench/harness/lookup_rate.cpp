@@ -6,6 +6,7 @@
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 namespace shadowtiles::bench {
@@ -23,19 +24,14 @@ Result<double> look_up(const ShadowMap& map, store::Method method, const Vec3& p
   return map.query_pcf(point, method, kernel);
 }
 
-}  // namespace
-
-Result<LookupRate> measure_lookup_rate(const ShadowMap& map, store::Method method, std::span<const Vec3> points,
-                                       unsigned kernel, unsigned threads, double min_seconds) {
-  LookupRate rate;
-  if (points.empty() || threads == 0) return rate;
-  double sink = 0;
-  for (const Vec3& p : points) {  // warm-up: decode and cache the tiles
-    auto value = look_up(map, method, p, kernel);
-    if (!value) return value.error();
-    sink += *value;
-  }
-  const uint64_t misses_before = map.cache_stats().misses;
+// The timed part of the rate measurements: every thread walks `points` cyclically (thread i from
+// i/n of it) until `min_seconds` passed; returns the lookups made, the wall time and their rate.
+// `look_up(point)` returns the answer as a number, or (when it can fail) a Result of one; the first
+// error stops every thread and is returned.
+template <typename LookUp>
+Result<LookupRate> timed_cyclic_lookups(std::span<const Vec3> points, unsigned threads, double min_seconds,
+                                        const LookUp& look_up) {
+  constexpr bool can_fail = !std::is_arithmetic_v<std::invoke_result_t<const LookUp&, const Vec3&>>;
   std::atomic<uint64_t> total{0};
   std::mutex error_mutex;
   std::optional<Error> error;
@@ -49,64 +45,63 @@ Result<LookupRate> measure_lookup_rate(const ShadowMap& map, store::Method metho
     // Check the clock every 64 lookups: cheap next to a lookup, fine-grained enough for 0.3 s.
     do {
       for (int j = 0; j < 64; ++j, ++count) {
-        auto value = look_up(map, method, points[i], kernel);
-        if (!value) {
-          std::lock_guard lock(error_mutex);
-          if (!error) error = value.error();
-          failed = true;
-          return;
+        if constexpr (can_fail) {
+          auto value = look_up(points[i]);
+          if (!value) {
+            std::lock_guard lock(error_mutex);
+            if (!error) error = value.error();
+            failed = true;
+            return;
+          }
+          local_sink += *value;
+        } else {
+          local_sink += look_up(points[i]);
         }
-        local_sink += *value;
         if (++i == points.size()) i = 0;
       }
     } while (Clock::now() < deadline && !failed);
     total += count;
-    if (local_sink < 0) std::abort();            // never: a use of the result the optimiser must keep
+    if (local_sink < 0) std::abort();  // never: a use of the result the optimiser must keep
   };
   std::vector<std::thread> pool;
   for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker, t);
   worker(0);
   for (auto& t : pool) t.join();
   if (error) return *error;
+  LookupRate rate;
   rate.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   rate.lookups = total;
   rate.lookups_per_second = rate.seconds > 0 ? double(rate.lookups) / rate.seconds : 0;
-  rate.cache_misses = map.cache_stats().misses - misses_before;
+  return rate;
+}
+
+}  // namespace
+
+Result<LookupRate> measure_lookup_rate(const ShadowMap& map, store::Method method, std::span<const Vec3> points,
+                                       unsigned kernel, unsigned threads, double min_seconds) {
+  if (points.empty() || threads == 0) return LookupRate{};
+  double sink = 0;
+  for (const Vec3& p : points) {  // warm-up: decode and cache the tiles
+    auto value = look_up(map, method, p, kernel);
+    if (!value) return value.error();
+    sink += *value;
+  }
   if (sink < 0) std::abort();
+  const uint64_t misses_before = map.cache_stats().misses;
+  auto rate = timed_cyclic_lookups(points, threads, min_seconds,
+                                   [&](const Vec3& p) { return look_up(map, method, p, kernel); });
+  if (!rate) return rate.error();
+  rate->cache_misses = map.cache_stats().misses - misses_before;
   return rate;
 }
 
 LookupRate measure_point_rate(std::span<const Vec3> points, unsigned threads, double min_seconds,
                               const std::function<double(const Vec3&)>& look_up) {
-  LookupRate rate;
-  if (points.empty() || threads == 0) return rate;
+  if (points.empty() || threads == 0) return LookupRate{};
   double sink = 0;
-  for (const Vec3& p : points) sink += look_up(p);
-  std::atomic<uint64_t> total{0};
-  const auto start = Clock::now();
-  const auto deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(min_seconds));
-  auto worker = [&](unsigned index) {
-    size_t i = points.size() * index / threads;
-    uint64_t count = 0;
-    double local_sink = 0;
-    do {
-      for (int j = 0; j < 64; ++j, ++count) {
-        local_sink += look_up(points[i]);
-        if (++i == points.size()) i = 0;
-      }
-    } while (Clock::now() < deadline);
-    total += count;
-    if (local_sink < 0) std::abort();
-  };
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker, t);
-  worker(0);
-  for (auto& t : pool) t.join();
-  rate.seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  rate.lookups = total;
-  rate.lookups_per_second = rate.seconds > 0 ? double(rate.lookups) / rate.seconds : 0;
+  for (const Vec3& p : points) sink += look_up(p);  // warm-up
   if (sink < 0) std::abort();
-  return rate;
+  return *timed_cyclic_lookups(points, threads, min_seconds, look_up);  // look_up cannot fail
 }
 
 Result<LookupRate> measure_batch_rate(const ShadowMap& map, store::Method method, std::span<const Vec3> points,

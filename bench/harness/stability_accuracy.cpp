@@ -27,36 +27,30 @@ bool is_exact_name(const std::string& method) {
   return parsed && store::method_properties(*parsed).interval_exact && !store::method_properties(*parsed).reference;
 }
 
-// Light a lossless method lets through where raw does not: its false-lit receivers beyond raw's
-// (a lossless method's lit set contains raw's, so the difference counts exactly those receivers).
-void check_no_extra_leak(ScenarioResult& result, const std::vector<StabilityRow>& rows, uint64_t tolerance,
-                         const std::string& why) {
-  for (const StabilityRow& r : rows) {
+// Light a lossless method lets through where raw does not, on every row of the result: its false-lit
+// receivers beyond raw's (a lossless method's lit set contains raw's, so the difference counts exactly
+// those receivers). None is allowed.
+void check_no_extra_leak(ScenarioResult& result) {
+  for (const StabilityRow& r : result.rows) {
     if (!is_exact_name(r.method)) continue;
-    const StabilityRow* raw = raw_row(rows, r.subject, r.resolution, r.elevation);
+    const StabilityRow* raw = raw_row(result.rows, r.subject, r.resolution, r.elevation);
     if (!raw) continue;
     const int64_t extra = int64_t(r.false_lit) - int64_t(raw->false_lit);
     std::string where = fmt::format("{} {}^2{}", r.subject, r.resolution,
                                     std::isnan(r.elevation) ? "" : fmt::format(" el {:g}", r.elevation));
-    result.check(fmt::format("{} {}: no light leak beyond raw's (tolerance {})", where, r.method, tolerance),
-                 extra <= int64_t(tolerance),
-                 fmt::format("false lit {} vs raw {} of {} receivers{}", r.false_lit, raw->false_lit, r.receivers,
-                             why.empty() ? "" : "; " + why));
+    result.check(fmt::format("{} {}: no light leak beyond raw's (tolerance 0)", where, r.method), extra <= 0,
+                 fmt::format("false lit {} vs raw {} of {} receivers", r.false_lit, raw->false_lit, r.receivers));
   }
 }
 
-void append(std::vector<StabilityRow>& to, std::vector<StabilityRow> rows) {
-  for (auto& r : rows) to.push_back(std::move(r));
-}
+// The map side of the single-resolution scenarios (1, 2, 3, 9).
+uint32_t accuracy_resolution(const StabilityContext& context) { return context.options().quick ? 512 : 2048; }
 
 }  // namespace
 
 Result<ScenarioResult> run_open_geometry(StabilityContext& context) {
-  ScenarioResult result;
-  result.id = "open_geometry";
-  result.title = "1. Open geometry";
-  const bool quick = context.options().quick;
-  const uint32_t resolution = quick ? 512 : 2048;
+  ScenarioResult result("open_geometry", "1. Open geometry");
+  const uint32_t resolution = accuracy_resolution(context);
   const std::filesystem::path room = context.options().work_dir / "open_roof_room.obj";
   if (Status s = write_open_roof_room(room); !s) return s.error();
   struct Subject {
@@ -68,7 +62,8 @@ Result<ScenarioResult> run_open_geometry(StabilityContext& context) {
   std::vector<Subject> subjects{{"room (one-sided roof)", room, UpAxis::z, 135, 60},
                                 {"bunny", context.scene_file("bunny/stanford-bunny.obj"), UpAxis::y, 135, 45},
                                 {"fzk_haus", context.scene_file("fzk_haus/fzk_haus.obj"), UpAxis::y, 135, 45}};
-  if (!quick) subjects.push_back({"dragon_res2", context.scene_file("dragon_res2/dragon_vrip_res2.ply"), UpAxis::y, 135, 45});
+  if (!context.options().quick)
+    subjects.push_back({"dragon_res2", context.scene_file("dragon_res2/dragon_vrip_res2.ply"), UpAxis::y, 135, 45});
   result.setup = fmt::format("{}^2, tiles 1024^2 (whole map when smaller), {} uniform receivers per scene; "
                              "each scene built twice: our rule (open mesh: exit = entry) and, as a comparison, "
                              "the far-plane exit rule of the MMH authors' code",
@@ -78,13 +73,10 @@ Result<ScenarioResult> run_open_geometry(StabilityContext& context) {
     load.up = subject.up;
     auto scene = context.scene(subject.file, load);
     if (!scene) return scene.error();
-    MeasureSpec spec;
-    spec.subject = subject.name;
-    spec.light = *light_direction_from_sun(subject.azimuth, subject.elevation, subject.up);
-    spec.resolution = resolution;
-    auto rows = context.measure(**scene, spec);
-    if (!rows) return rows.error();
-    append(result.rows, *rows);
+    MeasureSpec spec = sun_spec(subject.name, resolution, subject.azimuth, subject.elevation, subject.up);
+    const size_t raw_row = result.rows.size();  // measure's rows start with raw's
+    if (Status s = context.measure_into(**scene, spec, result); !s) return s.error();
+    const uint64_t raw_false_lit = result.rows[raw_row].false_lit;
     spec.open_exit_at_far_plane = true;
     std::vector<store::Method> compared;
     for (store::Method m : supported_methods())
@@ -92,7 +84,6 @@ Result<ScenarioResult> run_open_geometry(StabilityContext& context) {
     spec.methods = compared;
     auto far = context.measure(**scene, spec);
     if (!far) return far.error();
-    const uint64_t raw_false_lit = rows->front().false_lit;
     for (const StabilityRow& r : *far)
       if (r.method != "raw [far-plane exit]") {
         result.notes.push_back(fmt::format("{}: {} leaks {} receivers more than our rule ({} false lit vs {})",
@@ -111,16 +102,13 @@ Result<ScenarioResult> run_open_geometry(StabilityContext& context) {
     if (is_exact_name(r.method) && (r.subject == "bunny" || r.subject.rfind("room", 0) == 0))
       result.check(fmt::format("{} {}: answers identical to raw's (all meshes open)", r.subject, r.method),
                    r.differs_from_raw == 0, fmt::format("{} answers differ", r.differs_from_raw));
-  check_no_extra_leak(result, result.rows, 0, "");
+  check_no_extra_leak(result);
   return result;
 }
 
 Result<ScenarioResult> run_thin_walls(StabilityContext& context) {
-  ScenarioResult result;
-  result.id = "thin_walls";
-  result.title = "2. Thin walls and closed objects";
-  const bool quick = context.options().quick;
-  const uint32_t resolution = quick ? 512 : 2048;
+  ScenarioResult result("thin_walls", "2. Thin walls and closed objects");
+  const uint32_t resolution = accuracy_resolution(context);
   const double azimuth = 90, elevation = 30;  // sun in the east: the wall's shadow falls west
   const Vec3 light = *light_direction_from_sun(azimuth, elevation, UpAxis::z);
   SyntheticBounds b = thin_wall_bounds();
@@ -140,34 +128,21 @@ Result<ScenarioResult> run_thin_walls(StabilityContext& context) {
     spec.subject = name;
     spec.light = light;
     spec.resolution = resolution;
-    auto rows = context.measure(**scene, spec);
-    if (!rows) return rows.error();
-    append(result.rows, *rows);
+    if (Status s = context.measure_into(**scene, spec, result); !s) return s.error();
   }
-  {
-    LoadOptions load;
-    auto scene = context.scene(context.scene_file("nefertiti/nefertiti.obj"), load);
-    if (!scene) return scene.error();
-    MeasureSpec spec;
-    spec.subject = "nefertiti";
-    spec.light = *light_direction_from_sun(135, 45, UpAxis::z);
-    spec.resolution = resolution;
-    auto rows = context.measure(**scene, spec);
-    if (!rows) return rows.error();
-    append(result.rows, *rows);
-  }
-  check_no_extra_leak(result, result.rows, 0, "");
+  auto nefertiti = context.shared_scene("nefertiti/nefertiti.obj", UpAxis::z);
+  if (!nefertiti) return nefertiti.error();
+  if (Status s = context.measure_into(**nefertiti, sun_spec("nefertiti", resolution, 135, 45, UpAxis::z), result); !s)
+    return s.error();
+  check_no_extra_leak(result);
   return result;
 }
 
 Result<ScenarioResult> run_grazing_sun(StabilityContext& context) {
-  ScenarioResult result;
-  result.id = "grazing_sun";
-  result.title = "3. Grazing sun";
-  const bool quick = context.options().quick;
-  const uint32_t resolution = quick ? 512 : 2048;
+  ScenarioResult result("grazing_sun", "3. Grazing sun");
+  const uint32_t resolution = accuracy_resolution(context);
   const std::vector<double> elevations =
-      quick ? std::vector<double>{2, 10, 60} : std::vector<double>{2, 5, 10, 30, 60, 90};
+      context.options().quick ? std::vector<double>{2, 10, 60} : std::vector<double>{2, 5, 10, 30, 60, 90};
   result.setup = fmt::format("{}^2, tiles 1024^2, sun azimuth 135, terrain declared a heightfield, {} uniform "
                              "receivers per scene",
                              resolution, context.options().receivers);
@@ -176,29 +151,20 @@ Result<ScenarioResult> run_grazing_sun(StabilityContext& context) {
   };
   for (const Subject& subject : {Subject{"terragen", "terragen/RealisticTerrain.ter"},
                                  Subject{"oahu", "oahu/oahu_w158n21.ply"}}) {
-    LoadOptions load;
-    load.heightfield_meshes = {"*"};
-    auto scene = context.scene(context.scene_file(subject.file), load);
+    auto scene = context.shared_scene(subject.file, UpAxis::z, true);
     if (!scene) return scene.error();
     for (double elevation : elevations) {
-      MeasureSpec spec;
-      spec.subject = subject.name;
-      spec.light = *light_direction_from_sun(135, elevation, UpAxis::z);
-      spec.resolution = resolution;
+      MeasureSpec spec = sun_spec(subject.name, resolution, 135, elevation, UpAxis::z);
       spec.elevation = elevation;
-      auto rows = context.measure(**scene, spec);
-      if (!rows) return rows.error();
-      append(result.rows, *rows);
+      if (Status s = context.measure_into(**scene, spec, result); !s) return s.error();
     }
   }
-  check_no_extra_leak(result, result.rows, 0, "");
+  check_no_extra_leak(result);
   return result;
 }
 
 Result<ScenarioResult> run_resolution_sweep(StabilityContext& context) {
-  ScenarioResult result;
-  result.id = "resolution_sweep";
-  result.title = "6. Resolution sweep";
+  ScenarioResult result("resolution_sweep", "6. Resolution sweep");
   const bool quick = context.options().quick;
   const std::vector<uint32_t> resolutions =
       quick ? std::vector<uint32_t>{256, 512, 1024} : std::vector<uint32_t>{256, 512, 1024, 2048, 4096};
@@ -213,19 +179,11 @@ Result<ScenarioResult> run_resolution_sweep(StabilityContext& context) {
                                 {"nefertiti", "nefertiti/nefertiti.obj", UpAxis::z, false},
                                 {"terragen", "terragen/RealisticTerrain.ter", UpAxis::z, true}};
   for (const Subject& subject : subjects) {
-    LoadOptions load;
-    load.up = subject.up;
-    if (subject.heightfield) load.heightfield_meshes = {"*"};
-    auto scene = context.scene(context.scene_file(subject.file), load);
+    auto scene = context.shared_scene(subject.file, subject.up, subject.heightfield);
     if (!scene) return scene.error();
     for (uint32_t resolution : resolutions) {
-      MeasureSpec spec;
-      spec.subject = subject.name;
-      spec.light = *light_direction_from_sun(135, subject.heightfield ? 30 : 45, subject.up);
-      spec.resolution = resolution;
-      auto rows = context.measure(**scene, spec);
-      if (!rows) return rows.error();
-      append(result.rows, *rows);
+      const MeasureSpec spec = sun_spec(subject.name, resolution, 135, subject.heightfield ? 30 : 45, subject.up);
+      if (Status s = context.measure_into(**scene, spec, result); !s) return s.error();
     }
   }
   // Tolerance: the error is a count of receivers out of a sample; two resolutions misclassify
@@ -250,11 +208,8 @@ Result<ScenarioResult> run_resolution_sweep(StabilityContext& context) {
 // second surface, so open meshes get width; the receivers here lie on the surfaces, as the contract
 // says, and a lossless method must still leak nothing raw does not, off the texel centre included.
 Result<ScenarioResult> run_surfaces_contract(StabilityContext& context) {
-  ScenarioResult result;
-  result.id = "surfaces_contract";
-  result.title = "9. Surfaces receiver contract";
-  const bool quick = context.options().quick;
-  const uint32_t resolution = quick ? 512 : 2048;
+  ScenarioResult result("surfaces_contract", "9. Surfaces receiver contract");
+  const uint32_t resolution = accuracy_resolution(context);
   struct Subject {
     std::string name, scene;  // scene: a write_surfaces_scene name, or a shared scene file
     UpAxis up;
@@ -281,10 +236,7 @@ Result<ScenarioResult> run_surfaces_contract(StabilityContext& context) {
     load.up = subject.up;
     auto scene = context.scene(file, load);
     if (!scene) return scene.error();
-    MeasureSpec spec;
-    spec.subject = subject.name;
-    spec.light = *light_direction_from_sun(subject.azimuth, subject.elevation, subject.up);
-    spec.resolution = resolution;
+    MeasureSpec spec = sun_spec(subject.name, resolution, subject.azimuth, subject.elevation, subject.up);
     spec.receivers = ReceiverContract::surfaces;
     auto rows = context.measure(**scene, spec);
     if (!rows) return rows.error();
@@ -294,9 +246,9 @@ Result<ScenarioResult> run_surfaces_contract(StabilityContext& context) {
         result.notes.push_back(fmt::format("{}: DAG-MH {} bytes vs raw {} (x{:.3f}), false lit {} vs raw {}", subject.name,
                                            r.bytes, raw->bytes, raw->bytes ? double(r.bytes) / double(raw->bytes) : 0.0,
                                            r.false_lit, raw->false_lit));
-    append(result.rows, *rows);
+    result.rows.insert(result.rows.end(), rows->begin(), rows->end());
   }
-  check_no_extra_leak(result, result.rows, 0, "");
+  check_no_extra_leak(result);
   return result;
 }
 

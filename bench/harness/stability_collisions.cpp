@@ -14,9 +14,7 @@
 namespace shadowtiles::bench {
 
 Result<ScenarioResult> run_hash_collisions(StabilityContext& context) {
-  ScenarioResult result;
-  result.id = "hash_collisions";
-  result.title = "8. Hash collisions in MMH merging";
+  ScenarioResult result("hash_collisions", "8. Hash collisions in MMH merging");
   const uint32_t resolution = context.options().quick ? 256 : 1024;
   result.setup = fmt::format("one {0}^2 tile per scene (dual depth from Embree), MH bottom-up, merged with the "
                              "topology hash cut to 1, 2, 4, 8 and 64 bits; every texel of the decoded MMH checked "
@@ -32,9 +30,7 @@ Result<ScenarioResult> run_hash_collisions(StabilityContext& context) {
   };
   for (const Subject& subject : {Subject{"nefertiti", "nefertiti/nefertiti.obj", false},
                                  Subject{"terragen", "terragen/RealisticTerrain.ter", true}}) {
-    LoadOptions load;
-    if (subject.heightfield) load.heightfield_meshes = {"*"};
-    auto scene = context.scene(context.scene_file(subject.file), load);
+    auto scene = context.shared_scene(subject.file, UpAxis::z, subject.heightfield);
     if (!scene) return scene.error();
     auto frame = LightFrame::fit(*light_direction_from_sun(135, 45, UpAxis::z), (*scene)->scene.bounds, resolution);
     if (!frame) return frame.error();

@@ -46,12 +46,35 @@ Result<const StabilityContext::LoadedScene*> StabilityContext::scene(const std::
   return pointer;
 }
 
+Result<const StabilityContext::LoadedScene*> StabilityContext::shared_scene(const std::string& relative, UpAxis up,
+                                                                            bool heightfield) {
+  LoadOptions load;
+  load.up = up;
+  if (heightfield) load.heightfield_meshes = {"*"};
+  return scene(scene_file(relative), load);
+}
+
 Result<std::vector<StabilityRow>> StabilityContext::measure(const LoadedScene& scene, MeasureSpec spec) {
   spec.scene_file = scene.file;
   spec.load = scene.load;
   GroundTruth truth(*device_, scene.scene, spec.light);
   const std::vector<uint8_t> lit = point_truth(truth, scene.receivers);
   return measure_build(spec, scene.receivers, lit, options_.work_dir);
+}
+
+Status StabilityContext::measure_into(const LoadedScene& scene, const MeasureSpec& spec, ScenarioResult& result) {
+  auto rows = measure(scene, spec);
+  if (!rows) return rows.error();
+  for (StabilityRow& r : *rows) result.rows.push_back(std::move(r));
+  return {};
+}
+
+MeasureSpec sun_spec(const std::string& subject, uint32_t resolution, double azimuth, double elevation, UpAxis up) {
+  MeasureSpec spec;
+  spec.subject = subject;
+  spec.light = *light_direction_from_sun(azimuth, elevation, up);
+  spec.resolution = resolution;
+  return spec;
 }
 
 const std::vector<ScenarioEntry>& all_scenarios() {

@@ -36,9 +36,7 @@ struct Case {
 }  // namespace
 
 Result<ScenarioResult> run_degenerate_input(StabilityContext& context) {
-  ScenarioResult result;
-  result.id = "degenerate_input";
-  result.title = "7. Degenerate input";
+  ScenarioResult result("degenerate_input", "7. Degenerate input");
   result.setup = "small OBJ scenes written by the suite, built with every supported method; "
                  "expected: a correct result (probed by point queries) or invalid_input (CLI exit code 2)";
   const std::string triangle = "v 0 0 0\nv 10 0 0\nv 0 10 0\nf 1 2 3\n";

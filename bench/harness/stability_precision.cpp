@@ -114,11 +114,7 @@ Status window_rows(StabilityContext& context, const Scene& scene, uint32_t resol
                    ScenarioResult& result) {
   const Vec3 light = *light_direction_from_sun(135, 30, UpAxis::z);
   // Centre: the highest of the scene's receivers (a mountain top, so ridges cast shadows nearby).
-  auto loaded = context.scene(context.scene_file("oahu/oahu_w158n21.ply"), [] {
-    LoadOptions load;
-    load.heightfield_meshes = {"*"};
-    return load;
-  }());
+  auto loaded = context.shared_scene("oahu/oahu_w158n21.ply", UpAxis::z, true);
   if (!loaded) return loaded.error();
   Vec3 centre = (*loaded)->receivers.front().position;
   for (const Receiver& r : (*loaded)->receivers)
@@ -247,10 +243,7 @@ void depth_precision_table(StabilityContext& context, ScenarioResult& result) {
                            Subject{"oahu", "oahu/oahu_w158n21.ply", UpAxis::z, 2},
                            Subject{"terragen", "terragen/RealisticTerrain.ter", UpAxis::z, 30},
                            Subject{"nefertiti", "nefertiti/nefertiti.obj", UpAxis::z, 45}}) {
-    LoadOptions load;
-    load.up = s.up;
-    if (s.name != "nefertiti") load.heightfield_meshes = {"*"};
-    auto scene = context.scene(context.scene_file(s.file), load);
+    auto scene = context.shared_scene(s.file, s.up, s.name != "nefertiti");
     if (!scene) continue;
     const Vec3 light = *light_direction_from_sun(135, s.elevation, s.up);
     auto f18 = LightFrame::fit(light, (*scene)->scene.bounds, 1u << 18);
@@ -271,14 +264,10 @@ void depth_precision_table(StabilityContext& context, ScenarioResult& result) {
 }  // namespace
 
 Result<ScenarioResult> run_precision(StabilityContext& context) {
-  ScenarioResult result;
-  result.id = "precision";
-  result.title = "5. Precision";
+  ScenarioResult result("precision", "5. Precision");
   const bool quick = context.options().quick;
   const unsigned side = quick ? 1 : 2;
-  LoadOptions load;
-  load.heightfield_meshes = {"*"};
-  auto oahu = context.scene(context.scene_file("oahu/oahu_w158n21.ply"), load);
+  auto oahu = context.shared_scene("oahu/oahu_w158n21.ply", UpAxis::z, true);
   if (!oahu) return oahu.error();
   result.setup = fmt::format(
       "oahu, sun 135, 30, heightfield; 2^18 and 2^20: a window of {0}x{0} tiles of 1024^2 around the highest "

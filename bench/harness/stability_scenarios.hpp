@@ -21,6 +21,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bench/harness/stability_measure.hpp"
@@ -50,6 +51,9 @@ struct StabilityTable {
 };
 
 struct ScenarioResult {
+  ScenarioResult() = default;
+  ScenarioResult(std::string id_, std::string title_) : id(std::move(id_)), title(std::move(title_)) {}
+
   std::string id;     // "open_geometry", ...
   std::string title;
   std::string setup;  // what was run (scenes, light, resolution), for the report
@@ -79,8 +83,13 @@ class StabilityContext {
   };
   // Loads (once) and samples options().receivers receivers (seeded).
   Result<const LoadedScene*> scene(const std::filesystem::path& file, const LoadOptions& load);
+  // scene() of the shared scene scene_file(relative) with `up`; `heightfield`: every mesh declared
+  // one (terrains).
+  Result<const LoadedScene*> shared_scene(const std::string& relative, UpAxis up, bool heightfield = false);
   // Builds `spec` and measures every method on the scene's receivers against ground truth.
   Result<std::vector<StabilityRow>> measure(const LoadedScene& scene, MeasureSpec spec);
+  // measure(), its rows appended to `result`'s.
+  Status measure_into(const LoadedScene& scene, const MeasureSpec& spec, ScenarioResult& result);
   Status init();
 
  private:
@@ -88,6 +97,9 @@ class StabilityContext {
   std::unique_ptr<EmbreeDevice> device_;
   std::map<std::string, std::unique_ptr<LoadedScene>> scenes_;
 };
+
+// A spec for `subject` at `resolution`, lit by the sun at (azimuth, elevation) over `up`.
+MeasureSpec sun_spec(const std::string& subject, uint32_t resolution, double azimuth, double elevation, UpAxis up);
 
 Result<ScenarioResult> run_open_geometry(StabilityContext& context);
 Result<ScenarioResult> run_thin_walls(StabilityContext& context);

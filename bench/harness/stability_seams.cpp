@@ -87,9 +87,7 @@ Result<Mismatches> compare(const ShadowMap& a, const ShadowMap& b, store::Method
 }  // namespace
 
 Result<ScenarioResult> run_tile_seams(StabilityContext& context) {
-  ScenarioResult result;
-  result.id = "tile_seams";
-  result.title = "4. Tile seams";
+  ScenarioResult result("tile_seams", "4. Tile seams");
   const bool quick = context.options().quick;
   const uint32_t resolution = quick ? 512 : 2048, small_tile = quick ? 32 : 128;
   result.setup = fmt::format("{}^2 built as one tile and as {}^2 tiles of {}^2; PCF 3x3 and 5x5 everywhere, 9x9 "
@@ -107,10 +105,7 @@ Result<ScenarioResult> run_tile_seams(StabilityContext& context) {
                        {}};
   for (const Subject& subject : {Subject{"nefertiti", "nefertiti/nefertiti.obj", UpAxis::z, false},
                                  Subject{"terragen", "terragen/RealisticTerrain.ter", UpAxis::z, true}}) {
-    LoadOptions load;
-    load.up = subject.up;
-    if (subject.heightfield) load.heightfield_meshes = {"*"};
-    auto scene = context.scene(context.scene_file(subject.file), load);
+    auto scene = context.shared_scene(subject.file, subject.up, subject.heightfield);
     if (!scene) return scene.error();
     const std::filesystem::path one_dir = context.options().work_dir / "seams_one",
                                 many_dir = context.options().work_dir / "seams_many";
@@ -122,7 +117,7 @@ Result<ScenarioResult> run_tile_seams(StabilityContext& context) {
       build.resolution = resolution;
       build.tile_size = tile;
       build.methods = supported_methods();
-      build.load = load;
+      build.load = (*scene)->load;
       build.overwrite = true;
       auto summary = run_build(build);
       if (!summary) return summary.error();
