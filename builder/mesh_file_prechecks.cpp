@@ -15,9 +15,13 @@
 namespace shadowtiles {
 namespace {
 
+// The first `limit` bytes of `file` (fewer when the file is shorter: a buffer of the file's own size,
+// not of `limit`, which a small file would pay zeroing).
 std::string read_head(const std::filesystem::path& file, size_t limit) {
+  std::error_code ec;
+  const uint64_t file_size = std::filesystem::file_size(file, ec);
   std::ifstream in(file, std::ios::binary);
-  std::string head(limit, '\0');
+  std::string head(size_t(ec ? limit : std::min<uint64_t>(limit, file_size)), '\0');
   in.read(head.data(), std::streamsize(head.size()));
   head.resize(size_t(std::max<std::streamsize>(0, in.gcount())));
   return head;
