@@ -5,8 +5,9 @@
 # Usage: scripts/fuzz.sh [--ci | --long] [--runs N] [--time S] [--jobs J] [--seed S] [--work DIR] [--no-build] [TARGET...]
 #   --ci     (default) 100,000 executions per target, seeded (-seed=1: CI sees the same mutations on
 #            every run, so a CI failure reproduces and a green CI is not luck; --long explores), each
-#            target capped at --time 150 s and all of them at --budget 300 s (a target starting late
-#            gets what is left of it: regressions + fuzzing end within ~5 min on 2 cores); CI runs this
+#            target capped at --time 240 s and all of them at --budget 300 s (a target starting late
+#            gets what is left of it: regressions + fuzzing end within ~5 min on 2 cores; the slowest,
+#            fuzz_scene_loader, needs ~180 CPU-s for its count); CI runs this
 #   --long   1,000,000 executions per target, each capped at 3 h (ctest label `long`: fuzz_long);
 #            it also records each target's row in fuzz/long-run.tsv (committed: RELIABILITY.md shows
 #            the last long run of every target beside the CI run), with its date, commit and load
@@ -18,7 +19,7 @@
 # Builds what it needs: the Release CLI in build/ (for the seed stores) when missing, the fuzz
 # targets in build-fuzz/ (clang, -DSHADOWTILES_FUZZ=ON, assertions on).
 # Writes build-fuzz/fuzz-work/summary.tsv (target, runs asked, runs done, seconds, execs/s, crashes,
-# peak RSS MiB), which RELIABILITY.md reads. Exit 0 when no target crashed, 1 when one did (its
+# peak RSS MiB, CPU seconds), which RELIABILITY.md reads. Exit 0 when no target crashed, 1 when one did (its
 # input is kept in build-fuzz/fuzz-work/artifacts and its log printed). A target that reaches its
 # time cap before its count (a loaded machine) is reported as short, not failed.
 set -euo pipefail
@@ -26,7 +27,7 @@ cd "$(dirname "$0")/.."
 root=$(pwd)
 mode=ci
 runs=
-max_time=150
+max_time=240
 budget=300
 jobs=2
 seed=
@@ -35,7 +36,7 @@ build=yes
 targets=()
 while [ $# -gt 0 ]; do
   case "$1" in
-    --ci) mode=ci; max_time=150; budget=300 ;;
+    --ci) mode=ci; max_time=240; budget=300 ;;
     --seed) seed="$2"; shift ;;
     --long) mode=long; max_time=10800; budget=0 ;;
     --runs) runs="$2"; shift ;;
@@ -118,17 +119,22 @@ fuzz_one() {
     [ "$left" -lt "$cap" ] && cap=$left
     [ "$cap" -lt 5 ] && cap=5
   fi
-  ASAN_OPTIONS="$asan" nice -n 10 "$exe" -runs="$want" -max_total_time="$cap" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 "${seed_flag[@]}" \
+  # CPU seconds (user + sys, every thread) besides wall seconds: on a shared machine executions per
+  # CPU-second say what a target costs, executions per second mostly say the load.
+  local TIMEFORMAT='%U %S'
+  { time ASAN_OPTIONS="$asan" nice -n 10 "$exe" -runs="$want" -max_total_time="$cap" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 "${seed_flag[@]}" \
     -artifact_prefix="$work/artifacts/$target-" "${extra[@]}" "$work/evolved/$target" "$work/corpus/$target" \
-    > "$log" 2>&1 || status=$?
+    > "$log" 2>&1 || status=$?; } 2> "$work/logs/$target.cpu"
+  local cpu
+  cpu=$(awk '{ printf "%.1f", $1 + $2 }' "$work/logs/$target.cpu" 2> /dev/null)
   local done_runs rate rss
   done_runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
   rss=$(sed -n 's/^stat::peak_rss_mb: *//p' "$log" | tail -1)
   local crashes=0
   [ $status -ne 0 ] && crashes=1
-  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$target" "$want" "${done_runs:-0}" "$(( $(date +%s) - t0 ))" \
-    "${rate:-0}" "$crashes" "${rss:-0}" > "$work/logs/$target.row"
+  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$target" "$want" "${done_runs:-0}" "$(( $(date +%s) - t0 ))" \
+    "${rate:-0}" "$crashes" "${rss:-0}" "${cpu:-0}" > "$work/logs/$target.row"
   if [ $status -ne 0 ]; then
     echo "$target: CRASH (exit $status), input in $work/artifacts:"; grep -v '^#\|^INFO\|^MS:' "$log" | tail -40
     return 1
@@ -163,9 +169,9 @@ summary="$work/summary.tsv"
   printf '# %s mode, %s UTC, commit %s, %s jobs on %s cores (nice 10), load average %s before and %s after, fuzzing %s s\n' \
     "$mode" "$(date -u '+%Y-%m-%d %H:%M')" "$commit" "$jobs" "$(nproc)" \
     "$load_before" "$(cut -d' ' -f1-3 /proc/loadavg)" "$((fuzzed - seeded))"
-  printf 'target\truns_asked\truns\tseconds\texecs_per_s\tcrashes\tpeak_rss_mb\n'
+  printf 'target\truns_asked\truns\tseconds\texecs_per_s\tcrashes\tpeak_rss_mb\tcpu_s\n'
   for target in "${targets[@]}"; do
-    cat "$work/logs/$target.row" 2> /dev/null || printf '%s\t%s\t0\t0\t0\t1\t0\n' "$target" "$(runs_for "$target")"
+    cat "$work/logs/$target.row" 2> /dev/null || printf '%s\t%s\t0\t0\t0\t1\t0\t0\n' "$target" "$(runs_for "$target")"
   done
 } > "$summary"
 # Long runs are kept in the repository (RELIABILITY.md shows them beside the CI run): each target's
@@ -175,7 +181,7 @@ if [ "$mode" = long ] && [ -z "$runs" ]; then
   record="$root/fuzz/long-run.tsv"
   stamp="$(date -u '+%Y-%m-%d %H:%M')	$commit	$load_before / $(cut -d' ' -f1-3 /proc/loadavg)	$jobs"
   {
-    printf 'target\truns_asked\truns\tseconds\texecs_per_s\tcrashes\tpeak_rss_mb\tdate_utc\tcommit\tload_before_after\tjobs\n'
+    printf 'target\truns_asked\truns\tseconds\texecs_per_s\tcrashes\tpeak_rss_mb\tcpu_s\tdate_utc\tcommit\tload_before_after\tjobs\n'
     for target in "${all_targets[@]}"; do
       if [[ " ${targets[*]} " == *" $target "* ]]; then
         printf '%s\t%s\n' "$(grep -P "^$target\t" "$summary")" "$stamp"

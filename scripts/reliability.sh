@@ -52,18 +52,20 @@ for check in "${checks[@]}"; do
 done
 
 # A fuzz.sh summary (its "# ..." line: mode, date, commit, jobs, load; then one row per target) as a
-# table; fuzz/long-run.tsv rows carry their own run's date, commit, load and jobs.
+# table; fuzz/long-run.tsv rows carry their own run's date, commit, load and jobs. Executions per
+# CPU-second (user + sys of the target's process) are what a target costs; execs/s depend on the load.
 fuzz_table() {
   local file=$1
   if [ ! -f "$file" ]; then echo; echo "(no run recorded: $file is missing)"; return; fi
   echo
   if grep -q '^# ' "$file"; then sed -n 's/^# /Run: /p' "$file" | head -1; echo; fi
-  echo "| target | executions asked | executions | seconds | execs/s | crashes | peak RSS MiB | run (UTC, commit, load before / after, jobs) |"
-  echo "|---|---|---|---|---|---|---|---|"
-  grep -v '^#' "$file" | tail -n +2 | while IFS=$'\t' read -r target asked runs seconds rate crashes rss when commit load jobs; do
+  echo "| target | executions asked | executions | seconds | execs/s | execs per CPU-s | crashes | peak RSS MiB | run (UTC, commit, load before / after, jobs) |"
+  echo "|---|---|---|---|---|---|---|---|---|"
+  grep -v '^#' "$file" | tail -n +2 | while IFS=$'\t' read -r target asked runs seconds rate crashes rss cpu when commit load jobs; do
     note=""
     [ "${runs:-0}" -lt "${asked:-0}" ] && note=" (short)"
-    echo "| \`$target\` | $asked | $runs$note | $seconds | $rate | $crashes | $rss | ${when:+$when, $commit, $load, $jobs jobs}${when:-this run} |"
+    per_cpu=$(awk -v r="${runs:-0}" -v c="${cpu:-0}" 'BEGIN { if (c + 0 > 0) printf "%.0f", r / c; else print "-" }')
+    echo "| \`$target\` | $asked | $runs$note | $seconds | $rate | $per_cpu | $crashes | $rss | ${when:+$when, $commit, $load, $jobs jobs}${when:-this run} |"
   done
 }
 
