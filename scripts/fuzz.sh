@@ -75,6 +75,7 @@ mkdir -p "$work/artifacts" "$work/logs" "$work/evolved"
 store=$(/usr/bin/python3 scripts/fuzz_corpus.py build/cli/shadowtiles "$work" 2> "$work/logs/corpus.log" | tail -1)
 seeded=$(date +%s)
 load_before=$(cut -d' ' -f1-3 /proc/loadavg)
+started_at=$(date -u '+%Y-%m-%d %H:%M')
 commit=$(git describe --always --dirty=+changes --exclude='*' 2> /dev/null || echo unknown)  # what the targets were built from
 export SHADOWTILES_FUZZ_STORE="$store"
 # A 16 MiB quarantine (ASan's default: 256 MiB) still holds every block freed by the last several
@@ -179,9 +180,9 @@ summary="$work/summary.tsv"
 # long run of some targets replaces only their rows).
 if [ "$mode" = long ] && [ -z "$runs" ]; then
   record="$root/fuzz/long-run.tsv"
-  stamp="$(date -u '+%Y-%m-%d %H:%M')	$commit	$load_before / $(cut -d' ' -f1-3 /proc/loadavg)	$jobs"
+  stamp="$started_at	$commit	$load_before / $(cut -d' ' -f1-3 /proc/loadavg)	$jobs"
   {
-    printf 'target\truns_asked\truns\tseconds\texecs_per_s\tcrashes\tpeak_rss_mb\tcpu_s\tdate_utc\tcommit\tload_before_after\tjobs\n'
+    printf 'target\truns_asked\truns\tseconds\texecs_per_s\tcrashes\tpeak_rss_mb\tcpu_s\tstarted_utc\tcommit\tload_before_after\tjobs\n'
     for target in "${all_targets[@]}"; do
       if [[ " ${targets[*]} " == *" $target "* ]]; then
         printf '%s\t%s\n' "$(grep -P "^$target\t" "$summary")" "$stamp"

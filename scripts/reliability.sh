@@ -65,7 +65,9 @@ fuzz_table() {
     note=""
     [ "${runs:-0}" -lt "${asked:-0}" ] && note=" (short)"
     per_cpu=$(awk -v r="${runs:-0}" -v c="${cpu:-0}" 'BEGIN { if (c + 0 > 0) printf "%.0f", r / c; else print "-" }')
-    echo "| \`$target\` | $asked | $runs$note | $seconds | $rate | $per_cpu | $crashes | $rss | ${when:+$when, $commit, $load, $jobs jobs}${when:-this run} |"
+    run="this run"
+    [ -n "${when:-}" ] && run="$when, $commit, $load, $jobs jobs"
+    echo "| \`$target\` | $asked | $runs$note | $seconds | $rate | $per_cpu | $crashes | $rss | $run |"
   done
 }
 
