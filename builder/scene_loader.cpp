@@ -212,6 +212,16 @@ Result<Scene> convert(const aiScene& ai, const std::filesystem::path& file, Heig
 
 Result<Scene> import_with_assimp(const std::filesystem::path& file, const std::string& extension,
                                  HeightfieldMatcher& matcher) {
+  // The PLY/OFF pre-checks first: they are one read of the file, while constructing an
+  // Importer registers every importer and post-processing step (most of a refused file's cost).
+  if (extension == ".ply" || extension == ".off") {
+    std::error_code ec;
+    const uint64_t file_size = std::filesystem::file_size(file, ec);
+    if (ec) return make_error(ErrorCode::io_error, fmt::format("{}: {}", file.string(), ec.message()));
+    if (Status ok = extension == ".ply" ? check_ply_file(file, file_size) : check_off_file(file, file_size); !ok)
+      return ok.error();
+  }
+
   install_assimp_logger();
   Assimp::Importer importer;
   if (extension.empty() || !importer.IsExtensionSupported(extension)) {
@@ -221,14 +231,6 @@ Result<Scene> import_with_assimp(const std::filesystem::path& file, const std::s
         ErrorCode::unsupported,
         fmt::format("{}: no importer for the extension '{}' (known: {})", file.string(), extension, list));
   }
-
-  std::error_code ec;
-  const uint64_t file_size = std::filesystem::file_size(file, ec);
-  if (ec) return make_error(ErrorCode::io_error, fmt::format("{}: {}", file.string(), ec.message()));
-  if (extension == ".ply")
-    if (Status ok = check_ply_file(file, file_size); !ok) return ok.error();
-  if (extension == ".off")
-    if (Status ok = check_off_file(file, file_size); !ok) return ok.error();
 
   // Skeleton placeholder meshes some importers invent are not geometry.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);

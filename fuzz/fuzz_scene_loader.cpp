@@ -2,7 +2,9 @@
 // OFF header pre-checks that stop assimp from hanging or allocating gigabytes, the Terragen (.ter)
 // reader, and the conversion of whatever assimp returns (index checks, transforms, classification).
 // The first input byte picks the extension (.ply, .off, .ter); the rest is the file, written to a
-// per-process temporary file. assimp itself is not instrumented (Debian's library).
+// per-process temporary file. assimp itself is not instrumented (Debian's library). Inputs the
+// pre-checks refuse never construct an assimp Importer (scene_loader.cpp checks first), so most
+// executions cost one small file write and one read.
 // Invariant: no crash, an error has a message, an accepted scene has finite bounds and triangles.
 #include <unistd.h>
 
@@ -23,10 +25,12 @@ using namespace shadowtiles;
 
 namespace {
 
+// In memory (/dev/shm) unless TMPDIR says otherwise: a file is written and removed per input.
 std::filesystem::path temp_file(const char* extension) {
   const char* dir = std::getenv("TMPDIR");
-  return std::filesystem::path(dir && *dir ? dir : "/tmp") /
-         ("shadowtiles-fuzz-" + std::to_string(::getpid()) + extension);
+  std::error_code ec;
+  const char* base = dir && *dir ? dir : std::filesystem::is_directory("/dev/shm", ec) ? "/dev/shm" : "/tmp";
+  return std::filesystem::path(base) / ("shadowtiles-fuzz-" + std::to_string(::getpid()) + extension);
 }
 
 }  // namespace

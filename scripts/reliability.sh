@@ -51,6 +51,26 @@ for check in "${checks[@]}"; do
   echo "$name: $result"
 done
 
+# A fuzz.sh summary (its "# ..." line: mode, date, commit, jobs, load; then one row per target) as a
+# table; fuzz/long-run.tsv rows carry their own run's date, commit, load and jobs. Executions per
+# CPU-second (user + sys of the target's process) are what a target costs; execs/s depend on the load.
+fuzz_table() {
+  local file=$1
+  if [ ! -f "$file" ]; then echo; echo "(no run recorded: $file is missing)"; return; fi
+  echo
+  if grep -q '^# ' "$file"; then sed -n 's/^# /Run: /p' "$file" | head -1; echo; fi
+  echo "| target | executions asked | executions | seconds | execs/s | execs per CPU-s | crashes | peak RSS MiB | run (UTC, commit, load before / after, jobs) |"
+  echo "|---|---|---|---|---|---|---|---|---|"
+  grep -v '^#' "$file" | tail -n +2 | while IFS=$'\t' read -r target asked runs seconds rate crashes rss cpu when commit load jobs; do
+    note=""
+    [ "${runs:-0}" -lt "${asked:-0}" ] && note=" (short)"
+    per_cpu=$(awk -v r="${runs:-0}" -v c="${cpu:-0}" 'BEGIN { if (c + 0 > 0) printf "%.0f", r / c; else print "-" }')
+    run="this run"
+    [ -n "${when:-}" ] && run="$when, $commit, $load, $jobs jobs"
+    echo "| \`$target\` | $asked | $runs$note | $seconds | $rate | $per_cpu | $crashes | $rss | $run |"
+  done
+}
+
 fuzz_log="$work/fuzz.log"
 if bash scripts/fuzz.sh "$fuzz_mode" > "$fuzz_log" 2>&1; then fuzz_result=pass; else fuzz_result=FAIL; failed=1; fi
 echo "fuzzing ($fuzz_mode): $fuzz_result"
@@ -71,23 +91,20 @@ summary=build-fuzz/fuzz-work/summary.tsv
   echo
   echo "## Fuzzing (libFuzzer, ASan + UBSan; fuzz/README.md)"
   echo
-  echo "Mode \`$fuzz_mode\`: $fuzz_result. Seeds from real builds of the shared scenes; committed crash inputs"
-  echo "(fuzz/regressions) replayed first. A run stopped by its time cap before its count is marked short."
+  echo "Seeds from real builds of the shared scenes; committed crash inputs (fuzz/regressions) replayed"
+  echo "first. A run stopped by its time cap before its count is marked short."
   echo
-  echo "| target | executions asked | executions | seconds | execs/s | crashes | peak RSS MiB |"
-  echo "|---|---|---|---|---|---|---|"
-  if [ -f "$summary" ]; then
-    tail -n +2 "$summary" | while IFS=$'\t' read -r target asked runs seconds rate crashes rss; do
-      note=""
-      [ "${runs:-0}" -lt "${asked:-0}" ] && note=" (short)"
-      echo "| \`$target\` | $asked | $runs$note | $seconds | $rate | $crashes | $rss |"
-    done
+  echo "This run (\`scripts/fuzz.sh $fuzz_mode\`): $fuzz_result."
+  fuzz_table "$summary"
+  echo
+  if [ "$fuzz_mode" != --long ]; then
+    echo "Long mode: each target's last \`scripts/fuzz.sh --long\` run (10^6 executions asked), as recorded in"
+    echo "fuzz/long-run.tsv by that run."
+    fuzz_table fuzz/long-run.tsv
+    echo
   fi
-  echo
-  echo "Crashes found by fuzzing and fixed, each with a regression test: see fuzz/README.md (\"Crashes found"
-  echo "and fixed\"): a NaN texel accepted by the raw decoder (now a header + finite check), a PLY header"
-  echo "line \`end_header\\v…\` that hung assimp, and an unknown PLY header line that made assimp seek for 32 s"
-  echo "(both now refused up front)."
+  echo "Crashes found by fuzzing and fixed, each with a regression input replayed by every run and a unit"
+  echo "test: $(sed -n '/^## Crashes found and fixed/,/^## [^C]/p' fuzz/README.md | grep -c '^| \`fuzz_') (fuzz/README.md, \"Crashes found and fixed\")."
 } > "$out"
 echo "wrote $out"
 exit $failed

@@ -142,6 +142,26 @@ TEST(MeshFilePrechecks, HeaderTypesAndFormatMustBePly) {
   expect_refused(dir.path() / "float_count.ply", "not an integer type");
 }
 
+TEST(MeshFilePrechecks, OffCountsMustBeIntegers) {
+  // fuzz_scene_loader regression (off-vertex-count-then-vertex-line): no face count, then a vertex line
+  // after a 13-digit vertex count; assimp 5.2 took 60 (from "60.000") as the face count and wrapped the
+  // vertex count to 32 bits: a 10.5 GB allocation from an 856-byte file.
+  TempDir dir;
+  write_file(dir.path() / "wrapped.off", "\n6666666666653\n60.000 120.000 242.186\n90.000 120.000 245.388\n");
+  expect_refused(dir.path() / "wrapped.off",
+                 "the header must give the vertex and face counts as integers (found '60.000')");
+  write_file(dir.path() / "missing.off", "OFF\n3\n");
+  expect_refused(dir.path() / "missing.off", "the header must give the vertex and face counts as integers (found '3')");
+  // fuzz_scene_loader regression (off-keyword-glued-to-a-comment): "OFF#81 128 00 ..." passed as the
+  // keyword OFF and counts 128 and 0, while assimp 5.2 read it otherwise and crashed (SEGV).
+  write_file(dir.path() / "glued.off", "OFF#81 128 00 60.000 197.849\n3 0 1 2\n");
+  expect_refused(dir.path() / "glued.off", "unknown header keyword 'OFF#81'");
+  write_file(dir.path() / "coff.off", "COFF\n3 1 0\n0 0 0 1 1 1 1\n1 0 0 1 1 1 1\n0 1 0 1 1 1 1\n3 0 1 2\n");
+  EXPECT_EQ(load_ok(dir.path() / "coff.off").triangle_count(), 1u);
+  write_file(dir.path() / "ok.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(load_ok(dir.path() / "ok.off").triangle_count(), 1u);
+}
+
 TEST(MeshFilePrechecks, OffFacesMustNameTheirVertices) {
   // fuzz_scene_loader regression (off-face-count-beyond-its-line): assimp 5.2 reads a face's indices
   // without checking them; a face line "90.000 240.000 373.413" (a vertex line where a face was
