@@ -140,7 +140,7 @@ print(f"mixed load: {result}, {duration} s: wrk {wrk_requests} valid requests ({
       f"{d['hostile_requests']} hostile requests of {len(d['hostile_by_kind'])} kinds ({len(d['failures'])} failures), "
       f"5xx {server_5xx}, {d['compared']} sampled answers equal to the decoder's ({d['differ']} differ), "
       f"RSS {d['rss_filled_kib'] / 1024:.1f} MiB once the cache filled -> {d['rss_end_kib'] / 1024:.1f} MiB at the end "
-      f"({d['rss_change'] * 100:+.1f} %), exit on SIGTERM {exit_code}")
+      f"({d['rss_change'] * 100:+.1f} %, peak {d['rss_peak_kib'] / 1024:.1f} MiB), exit on SIGTERM {exit_code}")
 EOF
 if [ "$failed" -ne 0 ]; then
   echo "mixed load: FAIL (see above)" >&2
