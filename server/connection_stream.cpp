@@ -3,10 +3,12 @@
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
+#include <sys/uio.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <string_view>
 
 namespace shadowtiles::server {
 namespace {
@@ -95,19 +97,45 @@ ssize_t ConnectionStream::write(const char* ptr, size_t size) {
     phase_ = Phase::response;
     deadline_ = Clock::now() + limits_.write_timeout;
   }
-  size_t done = 0;
-  while (done < size) {
-    const ssize_t n = ::send(fd_, ptr + done, size - done, MSG_NOSIGNAL | MSG_DONTWAIT);
+  // The first write of a response is its status line and headers: hold them for the body. Not an
+  // interim answer (100 Continue), which the client waits for before it sends the body.
+  const std::string_view bytes(ptr, size);
+  if (written_ == 0 && held_.empty() && size <= kMaxHeldBytes && bytes.ends_with("\r\n\r\n") &&
+      !bytes.starts_with("HTTP/1.1 1")) {
+    held_.assign(bytes);
+    return ssize_t(size);
+  }
+  return send_held_and(ptr, size);
+}
+
+bool ConnectionStream::flush() {
+  if (held_.empty()) return true;
+  return send_held_and(nullptr, 0) == 0 && held_.empty();
+}
+
+ssize_t ConnectionStream::send_held_and(const char* ptr, size_t size) {
+  size_t held_sent = 0, done = 0;
+  while (held_sent < held_.size() || done < size) {
+    iovec parts[2];
+    msghdr message{};
+    message.msg_iov = parts;
+    if (held_sent < held_.size()) parts[message.msg_iovlen++] = {held_.data() + held_sent, held_.size() - held_sent};
+    if (done < size) parts[message.msg_iovlen++] = {const_cast<char*>(ptr) + done, size - done};
+    const ssize_t n = ::sendmsg(fd_, &message, MSG_NOSIGNAL | MSG_DONTWAIT);
     if (n > 0) {
-      done += size_t(n);
       written_ += uint64_t(n);
+      const size_t from_held = std::min(size_t(n), held_.size() - held_sent);
+      held_sent += from_held;
+      done += size_t(n) - from_held;
       continue;
     }
     if (n < 0 && errno == EINTR) continue;
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK) && poll_until(POLLOUT, deadline_)) continue;
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) fail_phase();
+    held_.erase(0, held_sent);
     return done > 0 ? ssize_t(done) : -1;
   }
+  held_.clear();
   return ssize_t(done);
 }
 

@@ -9,7 +9,10 @@
 //   response the whole response within write_timeout of its first byte.
 // A phase over its deadline or cap fails the read or write (httplib then drops the request) and is
 // reported by expired(). Reads are buffered across the requests of a keep-alive connection, so
-// pipelined requests are not lost.
+// pipelined requests are not lost. A response's status line and headers (httplib writes them, then
+// the body, in two writes) are held back and sent with the body in one sendmsg: one segment and one
+// wake-up of the client per small answer instead of two; flush() sends headers held for a response
+// without a body.
 // Thread safety: one connection, used by one thread at a time.
 #pragma once
 
@@ -28,6 +31,7 @@ class ConnectionStream final : public httplib::Stream {
  public:
   using Clock = std::chrono::steady_clock;
   static constexpr size_t kMaxHeaderBytes = 64 * 1024;
+  static constexpr size_t kMaxHeldBytes = 16 * 1024;  // response headers held for the body
   enum class Phase { idle, headers, body, response };
 
   struct Limits {
@@ -49,8 +53,10 @@ class ConnectionStream final : public httplib::Stream {
   Phase expired() const { return expired_; }
   // True when the last failure was the phase's byte cap rather than its deadline.
   bool over_cap() const { return over_cap_; }
-  // Bytes written for the current request (0: nothing answered yet).
+  // Bytes written for the current request (0: nothing answered yet). Held headers count once sent.
   uint64_t bytes_written() const { return written_; }
+  // Sends response headers still held back (a response without a body). Call after each request.
+  bool flush();
 
   bool is_readable() const override;
   bool is_writable() const override;
@@ -68,6 +74,9 @@ class ConnectionStream final : public httplib::Stream {
   bool poll_until(short events, Clock::time_point deadline) const;
   bool fill_buffer();
   void fail_phase() { expired_ = phase_; }
+  // Sends `held_` and then [ptr, ptr + size) with as few syscalls as the socket allows; the bytes of
+  // `ptr` sent (all of them, or fewer on a deadline or error, then -1 when none).
+  ssize_t send_held_and(const char* ptr, size_t size);
 
   int fd_;
   Limits limits_;
@@ -77,6 +86,7 @@ class ConnectionStream final : public httplib::Stream {
   Clock::time_point deadline_{};
   uint64_t phase_budget_ = 0;  // bytes the current read phase may still consume
   uint64_t written_ = 0;
+  std::string held_;  // response headers not sent yet
   char buffer_[16 * 1024];
   size_t buffer_begin_ = 0, buffer_end_ = 0;
 };
@@ -87,6 +97,7 @@ bool ConnectionStream::wait_for_request(std::chrono::milliseconds timeout, StopF
   expired_ = Phase::idle;
   over_cap_ = false;
   written_ = 0;
+  held_.clear();
   const Clock::time_point until = Clock::now() + timeout;
   while (buffer_begin_ == buffer_end_) {
     if (stop()) return false;

@@ -138,7 +138,8 @@ void HttpService::serve(ConnectionStream& stream) {
     if (!stream.wait_for_request(wait, [this] { return stopping(); })) break;
     t_close_after = false;
     bool client_closes = false;
-    const bool ok = process_request(stream, left == 1 || stopping(), client_closes, nullptr);
+    bool ok = process_request(stream, left == 1 || stopping(), client_closes, nullptr);
+    ok = stream.flush() && ok;  // headers of a response without a body
     if (ConnectionStream::Phase expired = stream.expired(); expired != ConnectionStream::Phase::idle) {
       metrics_.add_rejection(stream.over_cap()                            ? Metrics::Rejection::body_too_large
                              : expired == ConnectionStream::Phase::headers ? Metrics::Rejection::header_deadline

@@ -76,10 +76,10 @@ void serve_blob(ServiceState& state, const ShadowMap& map, bool versioned, const
 
 // Tile URL captures start at `first` (after the build id, when the URL has one).
 void get_tile(ServiceState& state, const httplib::Request& req, httplib::Response& res, bool versioned) {
+  // No query slot: a blob read is bounded I/O-like work (a lookup in the mmap'd snapshot, the
+  // blob's checksum and one copy), done on the connection's I/O thread like the send that follows.
   auto held = state.map();  // this request's build, even if a reload publishes another
   if (!held) return send_error(res, 503, "not_ready", "the store is not open yet");
-  auto slot = take_query_slot(state, res);
-  if (!slot) return;
   const ShadowMap& map = *held;
   const size_t first = versioned ? 2 : 1;
   if (versioned && !check_build_id(map, req.matches[1].str(), res)) return;
@@ -113,10 +113,8 @@ void get_tile(ServiceState& state, const httplib::Request& req, httplib::Respons
 }
 
 void get_skiplist(ServiceState& state, const httplib::Request& req, httplib::Response& res, bool versioned) {
-  auto held = state.map();
+  auto held = state.map();  // no query slot, as for tiles
   if (!held) return send_error(res, 503, "not_ready", "the store is not open yet");
-  auto slot = take_query_slot(state, res);
-  if (!slot) return;
   const ShadowMap& map = *held;
   if (versioned && !check_build_id(map, req.matches[1].str(), res)) return;
   auto options = options_from_params(req.params, 1);

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <optional>
 
 #include <spdlog/spdlog.h>
 
@@ -28,11 +29,11 @@ bool require_map(const ServiceState& state, httplib::Response& res) {
 
 void get_shadow(ServiceState& state, const httplib::Request& req, httplib::Response& res) {
   if (!require_map(state, res)) return;
-  auto slot = take_query_slot(state, res);
-  if (!slot) return;
   auto held = state.map();  // this request's build, even if a reload publishes another
   const ShadowMap& map = *held;
   set_build_header(res, map.meta().config_hash);
+  // Parsing and the JSON answer are the I/O thread's; only the decoding holds a query slot, so a
+  // slot is held for microseconds and waiters behind it move on quickly.
   static constexpr std::string_view kPointParams[] = {"x", "y", "z"};
   auto options = options_from_params(req.params, state.config.max_pcf, kPointParams);
   if (!options) return send_error(res, http_error_for(options.error()));
@@ -40,14 +41,20 @@ void get_shadow(ServiceState& state, const httplib::Request& req, httplib::Respo
   if (!point) return send_error(res, http_error_for(point.error()));
   auto query = resolve_query(map, *options);
   if (!query) return send_error(res, http_error_for(query.error()));
-  auto result = answer_point(map, *point, *query);
-  if (!result) return send_error(res, http_error_for(result.error()));
+  auto result = [&]() -> std::optional<Result<PointResult>> {
+    auto slot = take_query_slot(state, res);
+    if (!slot) return std::nullopt;
+    return answer_point(map, *point, *query);
+  }();
+  if (!result) return;  // 503 busy, sent
+  if (!*result) return send_error(res, http_error_for(result->error()));
   state.metrics.add_points(1);
-  const ShadowAnswer& a = result->answer;
+  const PointResult& answered = **result;
+  const ShadowAnswer& a = answered.answer;
   auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   send_json(res, 200,
-            {{"lit", result->lit},
-             {"shadowed", query->pcf == 0 ? !a.lit : result->lit <= 0.5},
+            {{"lit", answered.lit},
+             {"shadowed", query->pcf == 0 ? !a.lit : answered.lit <= 0.5},
              {"outside_map", a.outside_map},
              {"empty_tile", a.empty_tile},
              {"u", finite_or_null(a.light.u)},
