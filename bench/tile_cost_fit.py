@@ -1,20 +1,25 @@
 #!/usr/bin/env python3
 """Fits the shard plan's per-tile work model to measured per-tile costs (docs/scale-out.md).
 
-Usage: bench/tile_cost_fit.py NAME=PLAN_JSON,COSTS_JSON [NAME=...] [--shards 4] [--weights refs=8,...]
+Usage: bench/tile_cost_fit.py [--search] [--shards 4] [--tile-texels 1048576] [--weights PART=W,...]
+                              NAME=PLAN_JSON,COSTS_JSON[,COSTS_JSON...] ...
   PLAN_JSON:  `shadowtiles build SCENE ... --plan-shards N --tile-costs` (each tile's planned work parts)
-  COSTS_JSON: `shadowtiles build SCENE ... --json --tile-costs` of the same scene and config (all tiles,
-              or all N shards' outputs joined by `,` as COSTS_JSON,COSTS_JSON,...)
+  COSTS_JSON: `shadowtiles build SCENE ... --json --tile-costs` of the same scene and config (one whole
+              build, or every shard's output; bench/shard_balance.sh writes both)
+  PART: tile (its rays: --tile-texels), triangle_refs, covered_texels, triangle_edges, visible_triangles,
+        sub_cell_triangles, plane_edges, layered_cells; W in ray-equivalents per unit.
 Prints, per scene, the correlation of each part with the tile's measured CPU seconds, the
-least-squares fit (non-negative) over all scenes, and for each weighting (the current one, the fitted
-one, and --weights) the shard max/mean of measured CPU seconds under the plan that weighting makes.
+least-squares fit (non-negative) over all scenes, and for each weighting (the previous model, the
+current one of builder/shard_plan.cpp, the fitted one, and each --weights) the shard max/mean of
+measured CPU seconds under the plan that weighting makes. --search instead ranks a grid of weightings
+by their worst max/mean over the scenes at N = 4, then N = 8.
 """
 import json
 import sys
 
 PARTS = ["tile", "triangle_refs", "covered_texels", "triangle_edges", "visible_triangles", "sub_cell_triangles",
          "plane_edges", "layered_cells"]
-TEXELS = None  # texels per tile, from the plan
+TILE_TEXELS = 1 << 20  # rays of a tile (--tile-texels): 1024² by default
 
 
 def load_scene(spec):
@@ -30,7 +35,7 @@ def load_scene(spec):
         if w["morton"] in costs:
             row = {p: 0 for p in PARTS}
             row.update(w)
-            row["tile"] = 1.0
+            row["tile"] = 1.0  # weighed by TILE_TEXELS (its rays) in the models below
             row["cpu"] = costs[w["morton"]]
             tiles.append(row)
     missing = len(plan["tile_work"]) - len(tiles)
@@ -100,7 +105,12 @@ def imbalance(tiles, weights, shards):
 
 
 def main():
+    global TILE_TEXELS
     args = sys.argv[1:]
+    if "--tile-texels" in args:
+        i = args.index("--tile-texels")
+        TILE_TEXELS = float(args[i + 1])
+        del args[i:i + 2]
     shards, extra = 4, []
     if "--shards" in args:
         i = args.index("--shards")
@@ -128,8 +138,11 @@ def main():
     for name, _, tiles, _ in scenes:
         f = [sum(coef.get(p, 0) * t[p] for p in PARTS) for t in tiles]
         print(f"  {name}: r = {pearson(f, [t['cpu'] for t in tiles]):.3f}")
-    current = {"tile": 1 << 20, "triangle_refs": 8.0, "covered_texels": 4.5}
-    weightings = [("current (rays + 8 refs + 4.5 covered)", current), ("fitted", coef)]
+    previous = {"tile": TILE_TEXELS, "triangle_refs": 8.0, "covered_texels": 4.5}
+    current = {"tile": TILE_TEXELS, "triangle_refs": 8.0, "covered_texels": 2.0, "triangle_edges": 1e4,
+               "layered_cells": 1e3}
+    weightings = [("previous (rays + 8 refs + 4.5 covered)", previous),
+                  ("current (rays + 8 refs + 2 covered + 1e4 edges + 1e3 layered)", current), ("fitted", coef)]
     for w in extra:
         weightings.append((",".join(f"{k}={v:g}" for k, v in w.items()), w))
     print(f"\nshard max/mean of measured CPU seconds, N = {shards}:")
@@ -147,8 +160,7 @@ def search(scenes):
     """Grid of weightings in ray-equivalents (a tile's rays = its texels), best first by the worst
     shard max/mean over the scenes at N = 4, then at N = 8."""
     import itertools
-    w0 = scenes[0][1]["tile_work"][0]
-    texels = w0["work"] - 8.0 * w0["triangle_refs"] - 4.5 * w0["covered_texels"]  # plan made with the old model
+    texels = TILE_TEXELS
     results = []
     for a, b, c, e, d, l in itertools.product([8], [2, 4.5, 10], [0, 2e3, 5e3, 1e4], [0, 2e3, 5e3, 1e4],
                                               [0, 1e4, 2e4], [0, 1e3, 3e3]):
@@ -164,6 +176,10 @@ def search(scenes):
 if __name__ == "__main__":
     if "--search" in sys.argv:
         sys.argv.remove("--search")
+        if "--tile-texels" in sys.argv:
+            i = sys.argv.index("--tile-texels")
+            TILE_TEXELS = float(sys.argv[i + 1])
+            del sys.argv[i:i + 2]
         found = search([load_scene(a) for a in sys.argv[1:]])
         for worst4, worst8, w in found[:30]:
             print(f"N=4 {worst4:.3f} N=8 {worst8:.3f}", {k: v for k, v in w.items() if k != "tile"})
