@@ -26,7 +26,7 @@ mkdir -p "$out"
 common=(--sun 135,45 --resolution "$res" --tile "$tile")
 
 if [ "${PLANS:-1}" = 1 ]; then
-  echo "## Shard balance (planned work = rays + 8 x triangle refs + 4.5 x estimated hit texels), ${res}², tiles ${tile}, N = $shards"
+  echo "## Shard balance (planned work: builder/shard_plan.cpp, rays + triangle refs + a coarse depth map per tile), ${res}², tiles ${tile}, N = $shards"
   echo "| scene | tiles with triangles / all | max/mean work |"
   echo "|---|---|---|"
   while read -r name file sup; do

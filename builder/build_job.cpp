@@ -106,8 +106,10 @@ std::vector<TileWork> candidate_work(const LightSpaceScene& light_scene, const T
   for (uint64_t i = 0; i < layout.tile_count(); ++i) {
     TileCoord tile = TileLayout::from_morton_index(i);
     size_t refs = light_scene.triangles_of(tile).size();
-    if (refs)
-      work.push_back({i, uint64_t(layout.tile_size()) * layout.tile_size(), refs, estimate_covered_texels(light_scene, tile)});
+    if (!refs) continue;
+    const TileFootprint f = estimate_tile_footprint(light_scene, tile);
+    work.push_back({i, uint64_t(layout.tile_size()) * layout.tile_size(), refs, f.covered_texels, f.triangle_edges,
+                    f.visible_triangles, f.sub_cell_triangles, f.plane_edges, f.layered_cells});
   }
   return work;
 }
@@ -183,6 +185,15 @@ BuildSummary plan_only(const BuildConfig& config, const PreparedBuild& build) {
                    {"covered_texels_estimate", covered_texels_estimate(work)},
                    {"shard_plan", plan_json(plan)},
                    {"imbalance", shard_imbalance(plan)}};
+  if (config.report_tile_costs) {
+    nlohmann::json tiles = nlohmann::json::array();
+    for (const TileWork& w : work)
+      tiles.push_back({{"morton", w.morton_index}, {"triangle_refs", w.triangle_refs}, {"covered_texels", w.covered_texels},
+                       {"triangle_edges", w.triangle_edges}, {"visible_triangles", w.visible_triangles},
+                       {"sub_cell_triangles", w.sub_cell_triangles}, {"plane_edges", w.plane_edges},
+                       {"layered_cells", w.layered_cells}, {"work", w.work()}});
+    summary.stats["tile_work"] = std::move(tiles);
+  }
   return summary;
 }
 
@@ -487,6 +498,13 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
   // 6. Finish: stats, meta marked complete, one sync.
   BuildSummary summary = summarize(*build, *index, *tiles, *top_bytes, times, total_start);
   if (Status s = finish(db, meta, summary, total_start); !s) return s.error();
+  if (config.report_tile_costs) {  // in the printed summary only, never in the meta
+    nlohmann::json costs = nlohmann::json::array();
+    for (const TileCost& c : tiles->costs)
+      costs.push_back({{"morton", TileLayout::morton_index(c.tile)}, {"cpu_seconds", c.cpu_seconds},
+                       {"wall_seconds", c.wall_seconds}, {"hit_texels", c.hit_texels}, {"blob_bytes", c.blob_bytes}});
+    summary.stats["tile_costs"] = std::move(costs);
+  }
   return summary;
 }
 

@@ -63,6 +63,10 @@ struct BuildConfig {
   // Plan only: load and index the scene, put the plan for this many shards in the summary's stats
   // ("shard_plan", "imbalance") and return without touching any store.
   uint32_t plan_shards_only = 0;
+  // Measurement (`build --tile-costs`): the printed summary lists each tile's measured cost
+  // ("tile_costs": CPU and wall seconds, hit texels, blob bytes) or, with plan_shards_only, each tile's
+  // planned work and its parts ("tile_work"), to fit and check the plan's work model.
+  bool report_tile_costs = false;
   // Progress callback, called from the coordinating thread about once a second.
   std::function<void(const std::string& line)> on_progress;
   // Test hook: after this many tiles are committed, the process kills itself with SIGKILL.

@@ -19,6 +19,7 @@
 #include "codec/tile_layout.hpp"
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
+#include "store/map_advice.hpp"
 #include "store/serving_lock.hpp"
 #include "store/store_layout.hpp"
 #include "store/tile_info.hpp"
@@ -152,30 +153,35 @@ struct ShardCursor {
   std::deque<std::pair<Bytes, Bytes>> chunk;
   Bytes last_read;  // empty: nothing read yet
   bool exhausted = false;
-  uint64_t bytes_since_open = 0;
 };
 
+// Copies the next chunk_bytes of entries (short read transactions: the shard's map is only touched
+// inside them), drops each copied value's pages from this process right away (resident memory stays
+// bounded by the chunks, whatever the shard's size), then asks the kernel to fetch the chunk after
+// it, so reading the shard (values scattered in its file) overlaps the copying of this one.
 Status refill(ShardCursor& cursor, store::Database db, const MergeConfig& config) {
-  if (cursor.bytes_since_open >= config.reopen_after_bytes) {
-    // Drop the map so the pages read so far leave this process (memory stays bounded).
-    cursor.shard->store.reset();
-    auto reopened = open_read_only(cursor.shard->path);
-    if (!reopened) return reopened.error();
-    cursor.shard->store = std::move(*reopened);
-    cursor.bytes_since_open = 0;
-  }
+  const bool large_values = db == store::Database::tiles || db == store::Database::preview;
   uint64_t bytes = 0;
   size_t before = cursor.chunk.size();
   Status s = cursor.shard->store->for_each_after(db, cursor.last_read, [&](std::span<const uint8_t> key, std::span<const uint8_t> value) {
     cursor.chunk.emplace_back(Bytes(key.begin(), key.end()), Bytes(value.begin(), value.end()));
+    if (large_values) store::advise_done_with(value);
     bytes += key.size() + value.size();
     return bytes < config.chunk_bytes;
   });
   if (!s) return s.error();
-  cursor.bytes_since_open += bytes;
-  if (cursor.chunk.size() == before) cursor.exhausted = true;
-  else cursor.last_read = cursor.chunk.back().first;
-  return {};
+  if (cursor.chunk.size() == before) {
+    cursor.exhausted = true;
+    return {};
+  }
+  cursor.last_read = cursor.chunk.back().first;
+  if (!large_values) return {};
+  uint64_t ahead = 0;
+  return cursor.shard->store->for_each_after(db, cursor.last_read, [&](std::span<const uint8_t> key, std::span<const uint8_t> value) {
+    store::advise_will_need(value);
+    ahead += key.size() + value.size();
+    return ahead < config.chunk_bytes;
+  });
 }
 
 struct DatabaseTotals {
@@ -222,7 +228,14 @@ Result<MergeSummary> run_merge(const MergeConfig& config) {
   // The output: a new store, or the same merge resumed.
   store::Store::Options out_options;
   out_options.mode = store::Store::Mode::read_write;
-  out_options.initial_map_size = config.initial_map_size;
+  // Room for every shard's file from the start: growing the map aborts and redoes a transaction.
+  uint64_t shard_file_bytes = 0;
+  for (const Shard& s : shards) {
+    std::error_code ec;
+    const uintmax_t bytes = std::filesystem::file_size(s.path / "data.mdb", ec);
+    if (!ec) shard_file_bytes += bytes;
+  }
+  out_options.initial_map_size = std::max(config.initial_map_size, shard_file_bytes + shard_file_bytes / 8);
   out_options.no_sync = true;
   auto opened = store::Store::open(config.out, out_options);
   if (!opened) return opened.error();
@@ -287,7 +300,7 @@ Result<MergeSummary> run_merge(const MergeConfig& config) {
     auto resume_after = out.last_key(db);
     if (!resume_after) return resume_after.error();
     std::vector<ShardCursor> cursors;
-    for (Shard& s : shards) cursors.push_back({&s, {}, resume_after->value_or(Bytes{}), false, 0});
+    for (Shard& s : shards) cursors.push_back({&s, {}, resume_after->value_or(Bytes{}), false});
     // Min-heap of (key, cursor index); the key is the cursor's front.
     auto greater = [&](size_t a, size_t b) { return cursors[a].chunk.front().first > cursors[b].chunk.front().first; };
     std::priority_queue<size_t, std::vector<size_t>, decltype(greater)> heap(greater);

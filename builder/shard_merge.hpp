@@ -10,9 +10,10 @@
 // two shards (overlap), a blob failing its checks (corrupt_data).
 //
 // Streaming: per database, a k-way merge of the shards' key-ordered chunks (short read
-// transactions, reopened now and then so read pages do not accumulate), written with MDB_APPEND in
-// transactions of at most `transaction_bytes`. Memory: shards × chunk_bytes + transaction_bytes,
-// whatever the store's size. Resumable: a killed merge restarts, with the same shards, after the
+// transactions; each copied value's pages are dropped from the process at once, and the kernel is
+// asked to fetch the next chunk of each shard while this one is merged), written with MDB_APPEND in
+// transactions of at most `transaction_bytes`. Memory: shards × 2 × chunk_bytes + transaction_bytes
+// and the transaction's pages, whatever the store's size. Resumable: a killed merge restarts, with the same shards, after the
 // last key each database holds. Errors: invalid_input (the checks; exit 2), corrupt_data (exit 4),
 // io_error / out_of_space (exit 1).
 #pragma once
@@ -33,8 +34,7 @@ struct MergeConfig {
   std::vector<std::filesystem::path> shards;
   std::filesystem::path out;
   uint64_t transaction_bytes = 64ull << 20;
-  uint64_t chunk_bytes = 8ull << 20;          // read ahead per shard
-  uint64_t reopen_after_bytes = 512ull << 20;  // a shard's map is dropped and reopened after this much
+  uint64_t chunk_bytes = 8ull << 20;  // read ahead per shard
   uint64_t initial_map_size = 1ull << 30;
   bool overwrite = false;
   std::function<void(const std::string& line)> on_progress;

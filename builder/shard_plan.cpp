@@ -5,6 +5,29 @@
 #include <string>
 
 namespace shadowtiles {
+namespace {
+
+// Ray-equivalents per unit of each part, chosen (bench/tile_cost_fit.py --search) on the measured CPU
+// seconds of every tile of six shared scenes at 16384², tiles 1024, MMH + DAG-MH: the weighting whose
+// worst shard max/mean over the scenes is lowest at N = 4 (1.15) and stays low at N = 8 (1.25). Rays
+// alone (the old model with only triangle references and coverage) left honolulu_airport at 1.65:
+// its cost follows the visible triangle edges (r = 0.90), not the covered texels (r = 0.62), while
+// fzk_haus follows coverage and layers (r = 0.88, 0.82) more than edges (0.25).
+constexpr double kPerTriangleReference = 8.0;  // BVH build and intersection work
+constexpr double kPerCoveredTexel = 2.0;       // encoders and previews: a hit texel costs more than a miss
+constexpr double kPerTriangleEdge = 10000.0;   // depth edges inside the tile: what the encoders cannot share
+constexpr double kPerLayeredCell = 1000.0;     // surfaces behind surfaces: ray hits to sort, exit caps
+// Reported with --tile-costs for fitting, weighed 0: they add nothing over the parts above.
+constexpr double kPerPlaneEdge = 0;
+constexpr double kPerVisibleTriangle = 0;
+
+}  // namespace
+
+double TileWork::work() const {
+  return double(rays) + kPerTriangleReference * double(triangle_refs) + kPerCoveredTexel * double(covered_texels) +
+         kPerTriangleEdge * double(triangle_edges) + kPerPlaneEdge * double(plane_edges) +
+         kPerVisibleTriangle * double(visible_triangles) + kPerLayeredCell * double(layered_cells);
+}
 
 Result<ShardSpec> parse_shard_spec(std::string_view text) {
   auto bad = [&] {

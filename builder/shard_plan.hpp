@@ -23,22 +23,20 @@ struct ShardSpec {
 };
 Result<ShardSpec> parse_shard_spec(std::string_view text);
 
-// Measured on fzk_haus and oahu (16384², tiles 1024): a BVH build costs about as much per triangle
-// reference as this many rays cast and encoded (build stats bvh_thread_sum / refs vs the rest / rays).
-inline constexpr double kRayEquivalentsPerTriangleReference = 8.0;
-// Measured on fzk_haus 16384², 4 shards (least squares of shard thread-seconds on texels and hit
-// texels): a hit texel costs about 4.5 texels more, in the encoders and previews, than a miss.
-inline constexpr double kRayEquivalentsPerCoveredTexel = 4.5;
-
+// A tile's work, in ray-equivalents (one ray cast = 1): its rays plus the parts below, weighed by
+// shard_plan.cpp's constants (fitted to measured per-tile CPU seconds, docs/scale-out.md).
 struct TileWork {
   uint64_t morton_index;    // TileLayout::morton_index of the tile
   uint64_t rays;            // texels of the tile
   uint64_t triangle_refs;   // triangles binned to it
-  uint64_t covered_texels = 0;  // estimated hit texels (builder/tile_coverage_estimate.hpp)
-  double work() const {
-    return double(rays) + kRayEquivalentsPerTriangleReference * double(triangle_refs) +
-           kRayEquivalentsPerCoveredTexel * double(covered_texels);
-  }
+  // The tile's coarse depth map (builder/tile_coverage_estimate.hpp):
+  uint64_t covered_texels = 0;  // estimated hit texels
+  uint64_t triangle_edges = 0;  // neighbouring cells seeing different triangles
+  uint64_t visible_triangles = 0;
+  uint64_t sub_cell_triangles = 0;
+  uint64_t plane_edges = 0;     // neighbouring cells seeing different planes (creases, steps)
+  uint64_t layered_cells = 0;
+  double work() const;
 };
 
 struct ShardRange {

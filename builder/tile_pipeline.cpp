@@ -8,6 +8,8 @@
 #include <optional>
 #include <thread>
 
+#include <time.h>
+
 #include "builder/tile_preview_builder.hpp"
 #include "store/blob.hpp"
 #include "store/store_layout.hpp"
@@ -20,6 +22,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// CPU time of the calling thread: a tile's cost that the machine's load does not inflate.
+double thread_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + double(t.tv_nsec) * 1e-9;
+}
 
 // One tile: render, encode every method, and gather the puts of its one transaction.
 // Returns the tile's root interval (a miss when nothing covers it) through `root`.
@@ -108,6 +117,9 @@ Result<TilePipelineResult> run_tile_pipeline(const TilePipelineInput& input, con
       const size_t i = next++;
       if (i >= todo.size()) break;
       const TileCoord tile = todo[i];
+      const double cpu_start = thread_cpu_seconds();
+      const auto wall_start = Clock::now();
+      const uint64_t hits_before = mine.depth.hits, bytes_before = mine.blob_bytes;
       std::vector<store::Store::Put> puts;
       DepthInterval root;
       if (Status s = process_tile(input, tile, mine, rays_done, puts, root); !s) {
@@ -120,9 +132,12 @@ Result<TilePipelineResult> run_tile_pipeline(const TilePipelineInput& input, con
         break;
       }
       mine.store_seconds += seconds_since(store_start);
+      const TileCost cost{tile, thread_cpu_seconds() - cpu_start, seconds_since(wall_start),
+                          mine.depth.hits - hits_before, mine.blob_bytes - bytes_before};
       {
         std::lock_guard lock(result_mutex);
         result.roots[tile] = root;
+        result.costs.push_back(cost);
       }
       const uint64_t count = ++committed;
       if (input.debug_kill_after_tiles && count >= input.debug_kill_after_tiles) std::raise(SIGKILL);

@@ -53,8 +53,18 @@ struct TilePipelineInput {
   std::function<void(const std::string&)> on_progress;
 };
 
+// One tile's measured cost, for fitting the shard plan's work model (`build --tile-costs`).
+struct TileCost {
+  TileCoord tile;
+  double cpu_seconds = 0;   // the worker thread's CPU time on the tile: render, encode, previews, commit
+  double wall_seconds = 0;  // the same span in wall time (includes waiting for the store's write lock)
+  uint64_t hit_texels = 0;
+  uint64_t blob_bytes = 0;  // all methods
+};
+
 struct TilePipelineResult {
   TilePipelineTotals totals;
+  std::vector<TileCost> costs;  // one per tile committed in this run, in commit order
   std::map<TileCoord, DepthInterval> roots;  // each committed tile's root interval (a miss if empty)
   unsigned threads = 0;                      // worker threads actually started
   double wall_seconds = 0;

@@ -22,7 +22,7 @@ struct BuildFlags {
   unsigned threads = 2;
   std::vector<std::string> heightfields;
   double bias_texels = 2.0, exit_margin_texels = 4.0;
-  bool overwrite = false, json = false, exit_caps = true;
+  bool overwrite = false, json = false, exit_caps = true, tile_costs = false;
   uint64_t kill_after = 0;
 };
 
@@ -71,6 +71,7 @@ int run(const BuildFlags& flags) {
     config.shard = *shard;
   }
   config.plan_shards_only = flags.plan_shards;
+  config.report_tile_costs = flags.tile_costs;
   if (flags.out.empty() && !flags.plan_shards) { spdlog::error("--out is required"); return kInvalidInput; }
   config.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
 
@@ -115,6 +116,9 @@ void add_build_command(CLI::App& app, int& exit_code) {
                   "a local shard store for `shadowtiles merge` (docs/scale-out.md)");
   cmd->add_option("--plan-shards", flags->plan_shards,
                   "Print the work-balanced plan for N shards (JSON) and exit; builds nothing");
+  cmd->add_flag("--tile-costs", flags->tile_costs,
+                "With --json: list each tile's measured CPU seconds (with --plan-shards: its planned work and "
+                "parts), to check the plan's work model");
   auto* sun = cmd->add_option("--sun", flags->sun, "Sun azimuth,elevation in degrees (default 135,45)");
   cmd->add_option("--light-dir", flags->light_dir, "Direction the light travels, X,Y,Z")->excludes(sun);
   cmd->add_option("--up", flags->up, "Scene up axis for --sun: z or y")->capture_default_str();
