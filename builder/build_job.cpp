@@ -92,7 +92,9 @@ nlohmann::json build_identity(const BuildConfig& config, uint64_t scene_hash, ui
     identity["nearly_closed"] = {{"tolerance", config.nearly_closed.tolerance},
                                  {"max_ambiguous_area", config.nearly_closed.max_ambiguous_area},
                                  {"max_samples", config.nearly_closed.max_samples},
-                                 {"max_patch_triangles", config.nearly_closed.max_patch_triangles}};
+                                 {"max_patch_triangles", config.nearly_closed.max_patch_triangles},
+                                 {"min_full_samples", config.nearly_closed.min_full_samples},
+                                 {"full_budget", config.nearly_closed.full_budget}};
   return identity;
 }
 
@@ -276,6 +278,8 @@ StoreMeta initial_meta(const BuildConfig& config, const PreparedBuild& build) {
     meta.nearly_closed_max_ambiguous_area = config.nearly_closed.max_ambiguous_area;
     meta.nearly_closed_max_samples = config.nearly_closed.max_samples;
     meta.nearly_closed_max_patch_triangles = config.nearly_closed.max_patch_triangles;
+    meta.nearly_closed_min_full_samples = config.nearly_closed.min_full_samples;
+    meta.nearly_closed_full_budget = config.nearly_closed.full_budget;
   }
   return meta;
 }

@@ -173,24 +173,45 @@ NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOp
         }
       }
       r.samples = uint32_t(samples.size());
-      for (const auto& [i, weight] : samples) {
+      // The whole winding number (mesh + patches) on a subset of the samples, within a budget of solid
+      // angles: 0 just outside, 1 just inside, or the surface there is inside its own solid (faces
+      // between touching parts, parts overlapping) or inverted (a flipped face).
+      const size_t full_count = std::min(samples.size(), std::max<size_t>(options.min_full_samples,
+                                                                          options.full_budget / triangles.size()));
+      const double full_stride = double(samples.size()) / double(full_count);
+      size_t next_full = 0;
+      for (size_t s = 0; s < samples.size(); ++s) {
+        const auto& [i, weight] = samples[s];
         const auto& t = triangles[i];
         const Vec3 &a = scene.vertices[t[0]], &b = scene.vertices[t[1]], &c = scene.vertices[t[2]];
         const Vec3 n = cross(sub(b, a), sub(c, a));
         const double length = norm(n);
         // Offset: a hundredth of the triangle's size, along the unit normal, both sides.
         const double eps = 0.01 * std::sqrt(0.5 * length);
+        const bool full = next_full < full_count && s >= size_t(double(next_full) * full_stride);
+        if (full) ++next_full;
         double deviation = 0;
+        bool misplaced = false;
         for (double side : {1.0, -1.0}) {
           Vec3 p{};
           for (int k = 0; k < 3; ++k) p[k] = (a[k] + b[k] + c[k]) / 3 + side * eps * n[k] / length;
-          deviation = std::max(deviation, std::fabs(winding_number(scene.vertices, patch.triangles, p)));
+          const double w_patch = winding_number(scene.vertices, patch.triangles, p);
+          deviation = std::max(deviation, std::fabs(w_patch));
+          if (full) {
+            const double w_cycle = winding_number(scene.vertices, triangles, p) + w_patch;
+            misplaced |= std::lround(w_cycle) != (side > 0 ? 0 : 1);
+          }
         }
+        r.full_samples += full;
+        r.misplaced_samples += misplaced;
         r.max_deviation = std::max(r.max_deviation, deviation);
         if (deviation > options.tolerance) r.ambiguous_area += weight;
       }
       if (!(r.patched_volume > 0))
         refuse("mesh + patches has no positive volume (inside out or flat)");
+      else if (r.misplaced_samples > 0)
+        refuse("its winding number is not 0 outside and 1 inside at " + std::to_string(r.misplaced_samples) +
+               " of " + std::to_string(r.full_samples) + " samples (faces inside its own solid, or flipped)");
       else if (r.ambiguous_area > options.max_ambiguous_area)
         refuse("winding number ambiguous on too much of the surface");
       else
@@ -210,11 +231,11 @@ NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOp
     }
     spdlog::info("  mesh '{}': nearly closed {}: {} triangles, edges {} boundary {} non-manifold {} misoriented, "
                  "{} loops ({} patch triangles), w deviation |w_patch| over {} samples: max {:.3f}, {:.2f}% of the area "
-                 "above the tolerance {} (at most {:.2f}%){}{}",
+                 "above the tolerance {} (at most {:.2f}%), w not 0 outside / 1 inside at {} of {} samples{}{}",
                  info.name, r.accepted ? "accepted" : "refused", info.triangle_count, r.boundary_edges,
                  r.non_manifold_edges, r.misoriented_edges, r.loops, r.patch_triangles, r.samples, r.max_deviation,
-                 100 * r.ambiguous_area, options.tolerance, 100 * options.max_ambiguous_area,
-                 r.accepted ? "" : ": ", r.reason);
+                 100 * r.ambiguous_area, options.tolerance, 100 * options.max_ambiguous_area, r.misplaced_samples,
+                 r.full_samples, r.accepted ? "" : ": ", r.reason);
     report.meshes.push_back(std::move(r));
   }
   spdlog::info("nearly closed meshes: {} of {} open meshes accepted as solids ({} triangles, {} patch triangles; "

@@ -16,7 +16,11 @@
 //   - the area of the surface where |w_patch| > tolerance is at most max_ambiguous_area of the mesh's
 //     area (holes seen at a wide solid angle from much of the surface, flipped faces and patches that
 //     cut through the mesh all make |w_patch| large there), and
-//   - mesh + patches has positive volume (outward-facing: an inside-out solid gives no exit anyway).
+//   - mesh + patches has positive volume (outward-facing: an inside-out solid gives no exit anyway), and
+//   - its whole winding number (mesh + patches, every triangle) is 0 just outside and 1 just inside at
+//     every one of a subset of the samples (at least min_full_samples): a surface lying inside its own
+//     solid (faces between touching parts, overlapping parts) or a flipped face is no receiver place
+//     once the mesh is a solid, and real receivers are sampled there, so such a mesh stays open.
 // A mesh accepted this way becomes MeshKind::closed; its patch triangles live in Scene::patch_triangles,
 // where only the exit counter and the exit caps see them (never a first hit, never a receiver or an
 // occluder: builder/dual_depth_renderer, builder/receiver_surface_caps, builder/reference_caps).
@@ -48,6 +52,10 @@ struct NearlyClosedOptions {
   // A mesh whose boundary loops need more patch triangles than this is refused without the w test
   // (bounds the cost: samples x patch triangles solid angles).
   uint32_t max_patch_triangles = 20000;
+  // The whole winding number (every triangle) is computed on at least this many samples (all of them
+  // when fewer), more while samples x triangles stays within full_budget solid angles per side.
+  uint32_t min_full_samples = 512;
+  uint64_t full_budget = 20000000;
 };
 
 // One open mesh's test, for the log and the build summary.
@@ -64,6 +72,8 @@ struct MeshClosingReport {
   double max_deviation = 0;         // max |w_patch| over the samples (both sides)
   double ambiguous_area = 0;        // share of the area whose samples exceed the tolerance
   double patched_volume = 0;        // signed volume of mesh + patches
+  uint32_t full_samples = 0;        // samples where the whole winding number was computed
+  uint32_t misplaced_samples = 0;   // ... where it is not 0 outside and 1 inside (refused if any)
 };
 
 struct NearlyClosedReport {

@@ -68,7 +68,9 @@ nlohmann::json StoreMeta::to_json() const {
     json["nearly_closed"] = {{"tolerance", nearly_closed_tolerance},
                              {"max_ambiguous_area", nearly_closed_max_ambiguous_area},
                              {"max_samples", nearly_closed_max_samples},
-                             {"max_patch_triangles", nearly_closed_max_patch_triangles}};
+                             {"max_patch_triangles", nearly_closed_max_patch_triangles},
+                             {"min_full_samples", nearly_closed_min_full_samples},
+                             {"full_budget", nearly_closed_full_budget}};
   if (shard)
     json["shard"] = {{"index", shard->index}, {"count", shard->count}, {"morton_begin", shard->morton_begin},
                      {"morton_end", shard->morton_end}, {"tiles", shard->tiles}, {"work", shard->work},
@@ -203,6 +205,10 @@ Result<StoreMeta> StoreMeta::from_json(const nlohmann::json& json) {
     if (!samples) return samples.error();
     auto patch = field<uint32_t>(closing, "max_patch_triangles");
     if (!patch) return patch.error();
+    auto full = field<uint32_t>(closing, "min_full_samples");
+    if (!full) return full.error();
+    auto budget = field<uint64_t>(closing, "full_budget");
+    if (!budget) return budget.error();
     if (!(*tolerance >= 0 && *tolerance < 0.5 && *area >= 0 && *area <= 1 && *samples >= 1))
       return make_error(ErrorCode::corrupt_data, "meta: nearly_closed tolerance or area out of range");
     meta.nearly_closed = true;
@@ -210,6 +216,8 @@ Result<StoreMeta> StoreMeta::from_json(const nlohmann::json& json) {
     meta.nearly_closed_max_ambiguous_area = *area;
     meta.nearly_closed_max_samples = *samples;
     meta.nearly_closed_max_patch_triangles = *patch;
+    meta.nearly_closed_min_full_samples = *full;
+    meta.nearly_closed_full_budget = *budget;
   }
 
   // The frame and layout must be constructible, or every lookup would fail later.
