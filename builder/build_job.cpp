@@ -62,6 +62,11 @@ Status validate(const BuildConfig& config) {
   return {};
 }
 
+// Nearly closed meshes are solids only under `anywhere` (BuildConfig::close_nearly_closed).
+bool closes_nearly_closed(const BuildConfig& config) {
+  return config.close_nearly_closed && config.receivers == ReceiverContract::anywhere;
+}
+
 // Everything that defines the stored bytes: a store built from a different identity is not resumed.
 nlohmann::json build_identity(const BuildConfig& config, uint64_t scene_hash, uint32_t resolution,
                               uint32_t tile_size) {
@@ -83,6 +88,13 @@ nlohmann::json build_identity(const BuildConfig& config, uint64_t scene_hash, ui
   if (config.open_exit_at_far_plane) identity["open_exit_at_far_plane"] = true;
   if (config.cap_exits_at_receiver_surfaces) identity["exit_caps"] = "receiver_surfaces";
   if (config.receivers != ReceiverContract::anywhere) identity["receivers"] = receiver_contract_name(config.receivers);
+  if (closes_nearly_closed(config))
+    identity["nearly_closed"] = {{"tolerance", config.nearly_closed.tolerance},
+                                 {"max_ambiguous_area", config.nearly_closed.max_ambiguous_area},
+                                 {"max_samples", config.nearly_closed.max_samples},
+                                 {"max_patch_triangles", config.nearly_closed.max_patch_triangles},
+                                 {"min_full_samples", config.nearly_closed.min_full_samples},
+                                 {"full_budget", config.nearly_closed.full_budget}};
   return identity;
 }
 
@@ -144,7 +156,10 @@ struct PreparedBuild {
 
 Result<PreparedBuild> prepare(const BuildConfig& config) {
   LoadStats load_stats;
-  auto scene = load_scene(config.scene_path, config.load, &load_stats);
+  LoadOptions load = config.load;
+  load.close_nearly_closed = closes_nearly_closed(config);
+  load.nearly_closed = config.nearly_closed;
+  auto scene = load_scene(config.scene_path, load, &load_stats);
   if (!scene) return scene.error();
   uint32_t resolution = 0;
   if (config.resolution) {
@@ -269,6 +284,15 @@ StoreMeta initial_meta(const BuildConfig& config, const PreparedBuild& build) {
   meta.exit_margin = config.exit_margin_texels * build.frame.texel_size();
   meta.receivers = config.receivers;
   meta.exit_caps = config.cap_exits_at_receiver_surfaces && !config.open_exit_at_far_plane;
+  meta.nearly_closed = closes_nearly_closed(config);
+  if (meta.nearly_closed) {
+    meta.nearly_closed_tolerance = config.nearly_closed.tolerance;
+    meta.nearly_closed_max_ambiguous_area = config.nearly_closed.max_ambiguous_area;
+    meta.nearly_closed_max_samples = config.nearly_closed.max_samples;
+    meta.nearly_closed_max_patch_triangles = config.nearly_closed.max_patch_triangles;
+    meta.nearly_closed_min_full_samples = config.nearly_closed.min_full_samples;
+    meta.nearly_closed_full_budget = config.nearly_closed.full_budget;
+  }
   return meta;
 }
 
@@ -395,7 +419,11 @@ BuildSummary summarize(const PreparedBuild& build, const TileIndex& index, const
                  {"rendered", summary.tiles_rendered}, {"resumed", summary.tiles_resumed},
                  {"stored", summary.tiles_stored}}},
       {"scene", {{"triangles", build.scene.triangle_count()}, {"dropped", build.load_stats.dropped_triangles},
-                 {"meshes", build.load_stats.meshes}, {"closed_meshes", build.load_stats.closed_meshes}}},
+                 {"meshes", build.load_stats.meshes}, {"closed_meshes", build.load_stats.closed_meshes},
+                 {"nearly_closed", {{"meshes", build.load_stats.nearly_closed.accepted_meshes},
+                                    {"triangles", build.load_stats.nearly_closed.accepted_triangles},
+                                    {"patch_triangles", build.load_stats.nearly_closed.patch_triangles},
+                                    {"tested", build.load_stats.nearly_closed.meshes.size()}}}}},
       {"rays", summary.rays},
       {"hit_texels", totals.depth.hits},   // texels some geometry covers (this run's tiles)
       {"exit_texels", totals.depth.exits}, // texels with a real exit (upper > lower)

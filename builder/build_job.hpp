@@ -57,6 +57,12 @@ struct BuildConfig {
   bool cap_exits_at_receiver_surfaces = true;
   // Which receivers the intervals answer exactly (docs/receiver-contracts.md; `build --receivers`).
   ReceiverContract receivers = ReceiverContract::anywhere;
+  // Under `anywhere`, accept nearly closed meshes as solids (builder/nearly_closed_meshes.hpp; `build
+  // --no-nearly-closed` turns it off): their holes are patched for the exit counter, so their texels get
+  // exits. On by default: a scan with a few holes is a solid to any user, and raw's answers are kept
+  // (docs/receiver-contracts.md, "Nearly closed solids"). Ignored under `surfaces`, which needs no solids.
+  bool close_nearly_closed = true;
+  NearlyClosedOptions nearly_closed;
   // Scale-out (docs/scale-out.md): build only share `shard->index` of `shard->count` into this
   // store (a shard store for `shadowtiles merge`). The config hash stays the whole build's.
   std::optional<ShardSpec> shard;

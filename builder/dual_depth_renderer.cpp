@@ -27,6 +27,7 @@ struct ClosedHit {
   bool heightfield;
   float slack;  // how much shallower the triangle gets within half a texel (normalised depth)
   bool open = false;  // an open-mesh hit (collected only under the `surfaces` contract)
+  bool patch = false;  // a patch over a nearly closed mesh's hole: counts, but is never a surface
 };
 
 // Per-geometry data the filter needs: which solid-bounding triangles face the light, and which
@@ -35,6 +36,7 @@ struct ClosedGeometryData {
   std::vector<uint8_t> front;
   std::vector<uint8_t> heightfield;
   std::vector<float> slack;
+  std::vector<uint8_t> patch;  // patch triangles (builder/nearly_closed_meshes.hpp)
   bool open = false;  // the open meshes' geometry (its hits are collected under `surfaces`)
 };
 
@@ -67,7 +69,8 @@ void collect_closed_hits(const RTCFilterFunctionNArguments* args) {
     float t = RTCRayN_tfar(args->ray, args->N, i);
     uint32_t prim = RTCHitN_primID(args->hit, args->N, i);
     (*context->lanes)[lane % kPacket].push_back(
-        {t, prim, data->front[prim] != 0, data->heightfield[prim] != 0, data->slack[prim], data->open});
+        {t, prim, data->front[prim] != 0, data->heightfield[prim] != 0, data->slack[prim], data->open,
+         data->patch[prim] != 0});
     args->valid[i] = 0;
   }
 }
@@ -139,6 +142,7 @@ TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile) 
       geometry.closed.front.push_back(faces_light(a, b, c) ? 1 : 0);
       geometry.closed.heightfield.push_back(kind == MeshKind::heightfield ? 1 : 0);
       geometry.closed.slack.push_back(exit_slack(a, b, c));
+      geometry.closed.patch.push_back(0);
       geometry.closed_planes.push_back(DepthPlane::of(a, b, c));
     } else {
       emit(geometry.open_vertices, a);
@@ -147,9 +151,26 @@ TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile) 
       geometry.open.front.push_back(faces_light(a, b, c) ? 1 : 0);
       geometry.open.heightfield.push_back(0);
       geometry.open.slack.push_back(exit_slack(a, b, c));
+      geometry.open.patch.push_back(0);
       geometry.open_planes.push_back(DepthPlane::of(a, b, c));
       ++geometry.open_count;
     }
+  }
+  // Patches close nearly closed meshes for the exit counter only (resolve_interval never takes one for
+  // the first hit); they join the closed geometry, whose hits are all collected.
+  for (uint32_t t : scene.patches_of(tile)) {
+    const auto& tri = world.patch_triangles[t];
+    const LightSpacePoint& a = scene.vertex(tri[0]);
+    const LightSpacePoint& b = scene.vertex(tri[1]);
+    const LightSpacePoint& c = scene.vertex(tri[2]);
+    emit(geometry.closed_vertices, a);
+    emit(geometry.closed_vertices, b);
+    emit(geometry.closed_vertices, c);
+    geometry.closed.front.push_back(faces_light(a, b, c) ? 1 : 0);
+    geometry.closed.heightfield.push_back(0);
+    geometry.closed.slack.push_back(exit_slack(a, b, c));
+    geometry.closed.patch.push_back(1);
+    geometry.closed_planes.push_back(DepthPlane::of(a, b, c));
   }
   return geometry;
 }
@@ -197,24 +218,30 @@ DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t
     return a.t != b.t ? a.t < b.t : a.front > b.front;
   });
 
+  // The first hit is the first real surface: a patch is no surface (a ray entering through a hole
+  // facing the light first hits the mesh's inside).
+  size_t first_real = 0;
+  while (first_real < closed_hits.size() && closed_hits[first_real].patch) ++first_real;
   DepthInterval interval;  // miss: [1, +inf)
-  if (closed_hits.empty() && open_t == std::numeric_limits<float>::infinity()) return interval;
-  if (closed_hits.empty() || open_t <= closed_hits.front().t) {
+  if (first_real == closed_hits.size() && open_t == std::numeric_limits<float>::infinity()) return interval;
+  if (first_real == closed_hits.size() || open_t <= closed_hits[first_real].t) {
     interval.lower = open_t;
     interval.upper = options.open_exit_at_far_plane ? std::max(open_t, 1.0f) : open_t;
     return interval;
   }
-  interval.lower = closed_hits.front().t;
+  interval.lower = closed_hits[first_real].t;
   interval.upper = interval.lower;
-  if (!closed_hits.front().front) return interval;
-  // The solid is the union of closed meshes and heightfields; a heightfield's solid is closed by
-  // the far plane. The ray is inside while the counter is positive.
+  // The solid is the union of closed meshes (nearly closed ones with their patches) and heightfields; a
+  // heightfield's solid is closed by the far plane. The ray is inside while the counter is positive,
+  // counted from the light, patches before the first hit included; the exit is where it returns to 0
+  // at or after the first hit (at the first hit itself when that is a back face: upper = lower).
   int depth = 0, heightfield_depth = 0;
-  for (const ClosedHit& hit : closed_hits) {
+  for (size_t i = 0; i < closed_hits.size(); ++i) {
+    const ClosedHit& hit = closed_hits[i];
     depth += hit.front ? 1 : -1;
     if (hit.heightfield) heightfield_depth += hit.front ? 1 : -1;
     if (depth < 0) return interval;  // inconsistent: stay conservative
-    if (depth == 0) {
+    if (depth == 0 && i >= first_real) {
       interval.upper = std::max(interval.lower, hit.t - exit_margin - (use_slack ? hit.slack : 0.0f));
       return interval;
     }
@@ -234,6 +261,7 @@ DepthInterval resolve_interval(std::vector<ClosedHit>& closed_hits, float open_t
 // surface: upper = 1 (nothing lies beyond the last surface; a query there is off every surface).
 DepthInterval resolve_surfaces_interval(std::vector<ClosedHit>& hits, const DualDepthOptions& options) {
   const bool use_slack = !options.cap_exits_at_receiver_surfaces;
+  std::erase_if(hits, [](const ClosedHit& h) { return h.patch; });  // patches belong to `anywhere` only
   std::sort(hits.begin(), hits.end(), [](const ClosedHit& a, const ClosedHit& b) {
     return a.open != b.open ? a.open < b.open : a.prim < b.prim;
   });

@@ -2,7 +2,9 @@
 // [lower, upper] of depths that shadow every receiver alike (docs/architecture.md §4):
 // - lower = first hit (entry);
 // - upper = where the ray leaves all closed meshes: closed-mesh hits are walked in depth order with
-//   a counter (+1 front-facing, -1 back-facing); where it returns to 0 is the exit. The exit is
+//   a counter (+1 front-facing, -1 back-facing); where it returns to 0 is the exit. Patches over
+//   nearly closed meshes' holes (Scene::patch_triangles) count too, from the light on, but are never
+//   the first hit: a ray entering through a hole facing the light first hits the mesh's inside. The exit is
 //   pulled back by `exit_margin` plus the exit surface's depth change over half a texel, so receivers
 //   anywhere on the exit surface within the texel (a floor under a box, the shadowed slope of a
 //   hill) stay shadowed for any query bias up to that margin; with cap_exits_at_receiver_surfaces,

@@ -35,30 +35,39 @@ LightSpaceScene::LightSpaceScene(const Scene& scene, const LightFrame& frame, co
   for (const Vec3& p : scene.vertices) light_vertices_.push_back(frame.to_light(p));
 
   const uint32_t side = layout.tiles_per_side();
-  tile_offsets_.assign(layout.tile_count() + 1, 0);
-  auto for_each_reference = [&](auto&& visit) {
-    for (uint32_t t = 0; t < scene.triangles.size(); ++t) {
-      const auto& tri = scene.triangles[t];
-      TileRange r = tile_range(light_vertices_[tri[0]], light_vertices_[tri[1]], light_vertices_[tri[2]], layout);
-      if (r.empty) continue;
-      for (uint32_t y = r.y0; y <= r.y1; ++y)
-        for (uint32_t x = r.x0; x <= r.x1; ++x) visit(uint64_t(y) * side + x, t);
-    }
+  // Two passes (count, then fill) build a CSR index without per-tile vectors.
+  auto index = [&](const std::vector<std::array<uint32_t, 3>>& triangles, std::vector<uint64_t>& offsets,
+                   std::vector<uint32_t>& references) {
+    auto for_each_reference = [&](auto&& visit) {
+      for (uint32_t t = 0; t < triangles.size(); ++t) {
+        const auto& tri = triangles[t];
+        TileRange r = tile_range(light_vertices_[tri[0]], light_vertices_[tri[1]], light_vertices_[tri[2]], layout);
+        if (r.empty) continue;
+        for (uint32_t y = r.y0; y <= r.y1; ++y)
+          for (uint32_t x = r.x0; x <= r.x1; ++x) visit(uint64_t(y) * side + x, t);
+      }
+    };
+    offsets.assign(layout.tile_count() + 1, 0);
+    for_each_reference([&](uint64_t tile, uint32_t) { ++offsets[tile + 1]; });
+    for (uint64_t i = 0; i < layout.tile_count(); ++i) offsets[i + 1] += offsets[i];
+    references.resize(offsets.back());
+    std::vector<uint64_t> cursor(offsets.begin(), offsets.end() - 1);
+    for_each_reference([&](uint64_t tile, uint32_t t) { references[cursor[tile]++] = t; });
   };
-  // Two passes (count, then fill) build the CSR index without per-tile vectors.
-  for_each_reference([&](uint64_t tile, uint32_t) { ++tile_offsets_[tile + 1]; });
-  for (uint64_t i = 0; i < layout.tile_count(); ++i) {
-    if (tile_offsets_[i + 1] != 0) ++nonempty_tiles_;
-    tile_offsets_[i + 1] += tile_offsets_[i];
-  }
-  tile_triangles_.resize(tile_offsets_.back());
-  std::vector<uint64_t> cursor(tile_offsets_.begin(), tile_offsets_.end() - 1);
-  for_each_reference([&](uint64_t tile, uint32_t t) { tile_triangles_[cursor[tile]++] = t; });
+  index(scene.triangles, tile_offsets_, tile_triangles_);
+  for (uint64_t i = 0; i < layout.tile_count(); ++i)
+    if (tile_offsets_[i + 1] != tile_offsets_[i]) ++nonempty_tiles_;
+  index(scene.patch_triangles, patch_offsets_, tile_patches_);
 }
 
 std::span<const uint32_t> LightSpaceScene::triangles_of(TileCoord tile) const {
   uint64_t index = uint64_t(tile.y) * layout_.tiles_per_side() + tile.x;
   return {tile_triangles_.data() + tile_offsets_[index], tile_triangles_.data() + tile_offsets_[index + 1]};
+}
+
+std::span<const uint32_t> LightSpaceScene::patches_of(TileCoord tile) const {
+  uint64_t index = uint64_t(tile.y) * layout_.tiles_per_side() + tile.x;
+  return {tile_patches_.data() + patch_offsets_[index], tile_patches_.data() + patch_offsets_[index + 1]};
 }
 
 }  // namespace shadowtiles

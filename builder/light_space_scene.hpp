@@ -26,6 +26,8 @@ class LightSpaceScene {
   const LightSpacePoint& vertex(uint32_t index) const { return light_vertices_[index]; }
   // Triangles (indices into scene().triangles) that may cover a texel centre of `tile`.
   std::span<const uint32_t> triangles_of(TileCoord tile) const;
+  // Patch triangles (indices into scene().patch_triangles) that may cover a texel centre of `tile`.
+  std::span<const uint32_t> patches_of(TileCoord tile) const;
   uint64_t nonempty_tile_count() const { return nonempty_tiles_; }
   uint64_t triangle_references() const { return tile_triangles_.size(); }
 
@@ -36,6 +38,8 @@ class LightSpaceScene {
   std::vector<LightSpacePoint> light_vertices_;
   std::vector<uint64_t> tile_offsets_;   // tile_count + 1, row-major tiles
   std::vector<uint32_t> tile_triangles_;
+  std::vector<uint64_t> patch_offsets_;  // the same for the patch triangles
+  std::vector<uint32_t> tile_patches_;
   uint64_t nonempty_tiles_ = 0;
 };
 

@@ -250,6 +250,17 @@ std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord
     if (kind != MeshKind::open && nz < 0) continue;  // faces the light: an entry surface, the lit side
     lower_caps_by_triangle(a, b, c, window, cap, counts);
   }
+  // A patch over a nearly closed mesh's hole bounds its solid like the mesh's own faces: receivers lie
+  // below those not facing the light (docs/receiver-contracts.md, "Nearly closed solids").
+  for (uint32_t t : scene.patches_of(tile)) {
+    const auto& tri = world.patch_triangles[t];
+    const LightSpacePoint& a = scene.vertex(tri[0]);
+    const LightSpacePoint& b = scene.vertex(tri[1]);
+    const LightSpacePoint& c = scene.vertex(tri[2]);
+    const double nz = (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
+    if (nz < 0) continue;
+    lower_caps_by_triangle(a, b, c, window, cap, counts);
+  }
   return cap;
 }
 

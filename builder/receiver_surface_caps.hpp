@@ -4,7 +4,8 @@
 // between the centre ray's entry and exit (the back of a bust just inside its outline, the far slope
 // of a ridge at a grazing sun). Such a receiver must stay shadowed, so each texel's exit is capped by
 // the shallowest depth, within the texel's square, of every surface a shadowed receiver can lie on:
-// closed or heightfield triangles facing away from the light (or edge-on), and open triangles.
+// closed or heightfield triangles facing away from the light (or edge-on), and open triangles; patches
+// over nearly closed meshes' holes (Scene::patch_triangles) as closed triangles.
 // The depth is exact: depth is linear on a triangle, so its minimum over (triangle ∩ square) is at a
 // vertex of the clipped polygon. Computed in the scene's double light-space coordinates (global
 // texels), so the result does not depend on the tiling.

@@ -91,6 +91,13 @@ void apply_reference_caps(const LightSpaceScene& scene, TileCoord tile, Receiver
     triangles.push_back(make_triangle(scene.vertex(tri[0]), scene.vertex(tri[1]), scene.vertex(tri[2]),
                                       world.meshes[world.triangle_mesh[t]].kind));
   }
+  // Patches over nearly closed meshes' holes bound their solids (anywhere only; no surface under `surfaces`).
+  if (receivers == ReceiverContract::anywhere)
+    for (uint32_t t : scene.patches_of(tile)) {
+      const auto& tri = world.patch_triangles[t];
+      triangles.push_back(
+          make_triangle(scene.vertex(tri[0]), scene.vertex(tri[1]), scene.vertex(tri[2]), MeshKind::closed));
+    }
   // Texel -> triangles whose box touches its square (CSR), for texels with an exit only.
   auto has_exit = [&](size_t i) {
     const DepthInterval& t = intervals.texels[i];

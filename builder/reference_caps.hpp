@@ -3,7 +3,8 @@
 // triangle pairs): per texel, every triangle whose box touches the square is clipped to the square in
 // double precision, and
 // - anywhere: the cap is the shallowest clipped point of every surface a shadowed receiver can lie
-//   on (open triangles; closed and heightfield triangles not facing the light);
+//   on (open triangles; closed and heightfield triangles not facing the light, patches over nearly
+//   closed meshes' holes included);
 // - surfaces: the cap is the shallowest point of the second layer inside the square: for every
 //   ordered pair (T, T'), T's clipped polygon cut by T''s edges and by z_T - z_T' >= epsilon, and
 //   (near cover) by z_T - z_T' >= kSameSurface and z_T >= the texel's lower + near_cover_offset;

@@ -33,6 +33,9 @@ struct MeshInfo {
   // Closed meshes only: enclosed volume, negative when the mesh is inside out (normals inward; the
   // renderer then sees a back face first and falls back to entry = exit, conservatively).
   double signed_volume = 0;
+  // Accepted as a solid by the winding-number test (builder/nearly_closed_meshes.hpp): kind is closed and
+  // its holes are closed by patch triangles (Scene::patch_triangles) that only the exit counter and caps see.
+  bool nearly_closed = false;
 };
 
 struct Scene {
@@ -40,6 +43,12 @@ struct Scene {
   std::vector<std::array<uint32_t, 3>> triangles;  // counter-clockwise = front face
   std::vector<uint32_t> triangle_mesh;            // mesh index per triangle
   std::vector<MeshInfo> meshes;
+  // Patches over the holes of nearly closed meshes (builder/nearly_closed_meshes.hpp), over `vertices`
+  // (their loops' centroids are appended there, inside the bounds). Not geometry: they take part only in
+  // the dual-depth exit counter and the exit caps, never as a first hit, an occluder or a receiver.
+  std::vector<std::array<uint32_t, 3>> patch_triangles;
+  std::vector<uint32_t> patch_mesh;               // mesh index per patch triangle
+  bool nearly_closed_tested = false;              // close_nearly_closed_meshes ran on this scene
   WorldBounds bounds;                             // of the vertices used by triangles
 
   size_t triangle_count() const { return triangles.size(); }

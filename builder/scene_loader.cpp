@@ -427,6 +427,11 @@ Result<Scene> load_scene(const std::filesystem::path& file, const LoadOptions& o
         m.triangle_count, m.dropped_triangles, mesh_kind_name(m.kind), m.boundary_edges, m.non_manifold_edges,
         m.misoriented_edges, m.kind == MeshKind::closed && m.signed_volume < 0 ? ", inside out" : "");
   }
+  if (options.close_nearly_closed) {
+    s.nearly_closed = close_nearly_closed_meshes(scene, options.nearly_closed);
+    s.closed_meshes += s.nearly_closed.accepted_meshes;
+    s.open_meshes -= s.nearly_closed.accepted_meshes;
+  }
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   spdlog::info("loaded {}: {} triangles ({} dropped), {} meshes, bounds {}, {} up, {:.2f} s", file.string(),

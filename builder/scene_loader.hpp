@@ -49,6 +49,7 @@
 #include <vector>
 
 #include "builder/scene.hpp"
+#include "builder/nearly_closed_meshes.hpp"
 #include "codec/light_frame.hpp"
 #include "common/result.hpp"
 
@@ -60,6 +61,10 @@ struct LoadOptions {
   // The scene's up axis. Informational: the loader does not rotate anything; it is logged and used
   // by callers to turn sun azimuth/elevation into a light direction.
   UpAxis up = UpAxis::z;
+  // Accept nearly closed meshes as solids (builder/nearly_closed_meshes.hpp: the winding-number test,
+  // patches over their holes). Only meaningful under the `anywhere` contract; the build records it.
+  bool close_nearly_closed = false;
+  NearlyClosedOptions nearly_closed;
 };
 
 struct LoadStats {
@@ -69,6 +74,7 @@ struct LoadStats {
   uint64_t closed_meshes = 0;
   uint64_t open_meshes = 0;
   uint64_t heightfield_meshes = 0;
+  NearlyClosedReport nearly_closed;  // when LoadOptions::close_nearly_closed
   double seconds = 0;  // wall time of the whole load
 };
 

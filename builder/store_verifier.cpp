@@ -8,6 +8,7 @@
 
 #include "builder/dual_depth_renderer.hpp"
 #include "builder/light_space_scene.hpp"
+#include "builder/nearly_closed_meshes.hpp"
 #include "builder/reference_caps.hpp"
 #include "builder/second_layer_rule.hpp"
 #include "codec/cpvs_format.hpp"
@@ -75,10 +76,28 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
   for (store::Method m : methods)
     if (!map.meta().has_method(m))
       return make_error(ErrorCode::invalid_input, std::string("method '") + store::method_name(m) + "' is not in the store");
+  const StoreMeta& meta = map.meta();
+  // Nearly closed meshes are solids when the store says so: the scene is closed here with the store's
+  // parameters unless the caller loaded it closed already.
+  std::optional<Scene> closed_copy;
+  if (meta.nearly_closed && !scene.nearly_closed_tested) {
+    closed_copy = scene;
+    NearlyClosedOptions closing;
+    closing.tolerance = meta.nearly_closed_tolerance;
+    closing.max_ambiguous_area = meta.nearly_closed_max_ambiguous_area;
+    closing.max_samples = meta.nearly_closed_max_samples;
+    closing.max_patch_triangles = meta.nearly_closed_max_patch_triangles;
+    closing.min_full_samples = meta.nearly_closed_min_full_samples;
+    closing.full_budget = meta.nearly_closed_full_budget;
+    close_nearly_closed_meshes(*closed_copy, closing);
+  } else if (!meta.nearly_closed && !scene.patch_triangles.empty()) {
+    return make_error(ErrorCode::invalid_input,
+                      "the scene was loaded with nearly closed meshes accepted as solids; the store was built without");
+  }
+  const Scene& solids = closed_copy ? *closed_copy : scene;
   auto device = EmbreeDevice::create();
   if (!device) return device.error();
-  LightSpaceScene light_scene(scene, map.frame(), map.layout());
-  const StoreMeta& meta = map.meta();
+  LightSpaceScene light_scene(solids, map.frame(), map.layout());
   DualDepthOptions options;
   options.exit_margin = float(map.frame().depth_from_world(meta.exit_margin));
   options.receivers = meta.receivers;

@@ -22,7 +22,8 @@ struct BuildFlags {
   unsigned threads = 2;
   std::vector<std::string> heightfields;
   double bias_texels = 2.0, exit_margin_texels = 4.0;
-  bool overwrite = false, json = false, exit_caps = true, tile_costs = false;
+  bool overwrite = false, json = false, exit_caps = true, tile_costs = false, nearly_closed = true;
+  double nearly_closed_tolerance = 0.1;
   uint64_t kill_after = 0;
 };
 
@@ -61,6 +62,12 @@ int run(const BuildFlags& flags) {
   config.exit_margin_texels = flags.exit_margin_texels;
   config.overwrite = flags.overwrite;
   config.cap_exits_at_receiver_surfaces = flags.exit_caps;
+  config.close_nearly_closed = flags.nearly_closed;
+  if (!(flags.nearly_closed_tolerance > 0 && flags.nearly_closed_tolerance < 0.5)) {
+    spdlog::error("--nearly-closed-tolerance must be in (0, 0.5)");
+    return kInvalidInput;
+  }
+  config.nearly_closed.tolerance = flags.nearly_closed_tolerance;
   auto receivers = parse_receiver_contract(flags.receivers);
   if (!receivers) { spdlog::error("--receivers must be anywhere or surfaces"); return kInvalidInput; }
   config.receivers = *receivers;
@@ -145,6 +152,14 @@ void add_build_command(CLI::App& app, int& exit_code) {
                 "so receivers off the texel centre never get more light than raw gives them. --no-exit-caps "
                 "stores the papers' texel-centre intervals (smaller where exits exist; leaks at silhouettes "
                 "and ridges, STABILITY.md finding 1)");
+  cmd->add_flag("--nearly-closed,!--no-nearly-closed", flags->nearly_closed,
+                "Under --receivers anywhere (default on): accept meshes with a few holes or non-manifold edges "
+                "as solids when their generalized winding number passes the test (tolerance below; each mesh's "
+                "result is logged); their holes are patched for the exit counter, so the inside of the patched "
+                "surface is no receiver place (docs/receiver-contracts.md)");
+  cmd->add_option("--nearly-closed-tolerance", flags->nearly_closed_tolerance,
+                  "Largest |w - w_patched| at the test's sample points, on all but 1% of a mesh's area")
+      ->capture_default_str();
   cmd->add_flag("--overwrite", flags->overwrite, "Replace a different build in --out");
   cmd->add_flag("--json", flags->json, "Print the build summary as JSON");
   cmd->add_option("--debug-kill-after-tiles", flags->kill_after, "Test hook: SIGKILL self after N tiles")

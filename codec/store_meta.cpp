@@ -64,6 +64,13 @@ nlohmann::json StoreMeta::to_json() const {
       {"exit_caps", exit_caps},
       {"build_stats", build_stats},
   };
+  if (nearly_closed)
+    json["nearly_closed"] = {{"tolerance", nearly_closed_tolerance},
+                             {"max_ambiguous_area", nearly_closed_max_ambiguous_area},
+                             {"max_samples", nearly_closed_max_samples},
+                             {"max_patch_triangles", nearly_closed_max_patch_triangles},
+                             {"min_full_samples", nearly_closed_min_full_samples},
+                             {"full_budget", nearly_closed_full_budget}};
   if (shard)
     json["shard"] = {{"index", shard->index}, {"count", shard->count}, {"morton_begin", shard->morton_begin},
                      {"morton_end", shard->morton_end}, {"tiles", shard->tiles}, {"work", shard->work},
@@ -186,6 +193,31 @@ Result<StoreMeta> StoreMeta::from_json(const nlohmann::json& json) {
     auto caps = field<bool>(json, "exit_caps");
     if (!caps) return caps.error();
     meta.exit_caps = *caps;
+  }
+  if (json.contains("nearly_closed")) {
+    const nlohmann::json& closing = json["nearly_closed"];
+    if (!closing.is_object()) return make_error(ErrorCode::corrupt_data, "meta: nearly_closed is not an object");
+    auto tolerance = field<double>(closing, "tolerance");
+    if (!tolerance) return tolerance.error();
+    auto area = field<double>(closing, "max_ambiguous_area");
+    if (!area) return area.error();
+    auto samples = field<uint32_t>(closing, "max_samples");
+    if (!samples) return samples.error();
+    auto patch = field<uint32_t>(closing, "max_patch_triangles");
+    if (!patch) return patch.error();
+    auto full = field<uint32_t>(closing, "min_full_samples");
+    if (!full) return full.error();
+    auto budget = field<uint64_t>(closing, "full_budget");
+    if (!budget) return budget.error();
+    if (!(*tolerance >= 0 && *tolerance < 0.5 && *area >= 0 && *area <= 1 && *samples >= 1))
+      return make_error(ErrorCode::corrupt_data, "meta: nearly_closed tolerance or area out of range");
+    meta.nearly_closed = true;
+    meta.nearly_closed_tolerance = *tolerance;
+    meta.nearly_closed_max_ambiguous_area = *area;
+    meta.nearly_closed_max_samples = *samples;
+    meta.nearly_closed_max_patch_triangles = *patch;
+    meta.nearly_closed_min_full_samples = *full;
+    meta.nearly_closed_full_budget = *budget;
   }
 
   // The frame and layout must be constructible, or every lookup would fail later.

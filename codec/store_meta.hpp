@@ -65,6 +65,16 @@ struct StoreMeta {
   ReceiverContract receivers = ReceiverContract::anywhere;
   // Exits capped by the receiver surfaces inside each texel (absent in older stores: false).
   bool exit_caps = false;
+  // Nearly closed meshes accepted as solids (`anywhere` only; docs/receiver-contracts.md): the winding-number
+  // test's parameters, which verify reloads the scene with. Absent in
+  // older stores and when off: false.
+  bool nearly_closed = false;
+  double nearly_closed_tolerance = 0;
+  double nearly_closed_max_ambiguous_area = 0;
+  uint32_t nearly_closed_max_samples = 0;
+  uint32_t nearly_closed_max_patch_triangles = 0;
+  uint32_t nearly_closed_min_full_samples = 0;
+  uint64_t nearly_closed_full_budget = 0;
   nlohmann::json build_stats = nlohmann::json::object();
   // Set only in a shard store, whose `complete` stays false: it answers for its share alone.
   std::optional<ShardInfo> shard;

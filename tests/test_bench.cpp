@@ -5,8 +5,8 @@
 // Tolerance of "never less accurate": a query is lit when depth - bias <= value; raw stores the
 // interval's lower bound, a lossless method any value in [lower, upper]. The two answers can differ
 // only for a receiver whose biased depth lies inside (lower, upper] of its texel.
-// - bunny is an open mesh: every hit texel's interval is [lower, lower], so the answers must be
-//   identical on every receiver (tolerance 0).
+// - bunny is a nearly closed solid by default (holes in its base, docs/receiver-contracts.md): its
+//   texels get exits, and a lossless method is never false-lit more than raw (tolerance 0).
 // - nefertiti is closed: intervals span the solid (exit pulled back 4 texels). A receiver on the
 //   bust's own surface, away from the sun, whose texel-centre ray pierces the bust, can be answered
 //   lit by a lossless method (raw: shadowed) near silhouettes; on sun-facing steep slopes the lossless
@@ -113,11 +113,8 @@ TEST(Bench, TinyRunWritesSaneFigures) {
     const auto errors = [](const nlohmann::json& r, const char* prefix) {
       return r[std::string(prefix) + "false_lit"].get<int64_t>() + r[std::string(prefix) + "false_shadowed"].get<int64_t>();
     };
-    if (row["scene"] == "bunny") {  // open mesh: identical answers
-      EXPECT_EQ(row["differs_from_raw"].get<int>(), 0) << what;
-      EXPECT_EQ(row["camera_differs_from_raw"].get<int>(), 0) << what;
-      // Not asserted smaller: an open scan's texels all have degenerate intervals, so MH has nothing to
-      // merge and its tree is larger than raw's zstd floats (measured: 388 kB vs 288 kB at 512^2).
+    if (row["scene"] == "bunny") {  // a nearly closed solid: no light beyond raw's
+      EXPECT_LE(row["false_lit"].get<int64_t>(), ref["false_lit"].get<int64_t>()) << what;
     } else {
       EXPECT_LT(row["blob_bytes"].get<double>(), ref["blob_bytes"].get<double>()) << what << " is not smaller than raw";
       // Measured at 512^2: mh 57 wrong vs raw 67; 30 answers differ from raw's, 10 of them for the worse.

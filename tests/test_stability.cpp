@@ -161,9 +161,29 @@ TEST(StabilityOpenGeometry, OpenScanAnswersAsRaw) {
   BuildConfig config = make_config(testing::shared_scene("bunny/stanford-bunny.obj"), dir.path() / "s", 512,
                                    *light_direction_from_sun(135, 45, UpAxis::y), lossless_methods());
   config.load.up = UpAxis::y;
+  config.close_nearly_closed = false;  // the open scan as such (accepted as a solid by default)
   Measured m = build_and_measure(config, 4000);
   ASSERT_EQ(m.counts.size(), config.methods.size());
   for (size_t k = 1; k < config.methods.size(); ++k) EXPECT_EQ(differing(m.lit[k], m.lit[0]), 0u);
+}
+
+TEST(StabilityOpenGeometry, NearlyClosedScanLeaksNoMoreThanRaw) {
+  // The default build accepts the bunny (holes in its base) as a solid: exits appear, raw's false-lit
+  // receivers stay the only ones (docs/receiver-contracts.md, "Nearly closed solids").
+  TempDir dir;
+  BuildConfig config = make_config(testing::shared_scene("bunny/stanford-bunny.obj"), dir.path() / "s", 512,
+                                   *light_direction_from_sun(135, 45, UpAxis::y), lossless_methods());
+  config.load.up = UpAxis::y;
+  ASSERT_TRUE(config.close_nearly_closed);
+  Measured m = build_and_measure(config, 4000);
+  ASSERT_EQ(m.counts.size(), config.methods.size());
+  print_counts("bunny, nearly closed", config, m);
+  uint64_t differ = 0;
+  for (size_t k = 1; k < config.methods.size(); ++k) {
+    EXPECT_LE(m.counts[k].false_lit, m.counts[0].false_lit) << store::method_name(config.methods[k]);
+    differ += differing(m.lit[k], m.lit[0]);
+  }
+  EXPECT_GT(differ, 0u) << "exits exist: some answers differ from raw's (fewer false shadows)";
 }
 
 // --- 2. Thin walls -----------------------------------------------------------------------------

@@ -15,6 +15,13 @@ double number_at(const nlohmann::json& stats, const char* group, const std::stri
   return stats[group][key].get<double>();
 }
 
+// The build summary's scene.nearly_closed.triangles (builder/build_job.cpp), 0 when absent.
+uint64_t nearly_closed_triangles(const nlohmann::json& stats) {
+  if (!stats.contains("scene") || !stats["scene"].contains("nearly_closed")) return 0;
+  const nlohmann::json& closing = stats["scene"]["nearly_closed"];
+  return closing.contains("triangles") && closing["triangles"].is_number() ? closing["triangles"].get<uint64_t>() : 0;
+}
+
 }  // namespace
 
 
@@ -42,6 +49,7 @@ Result<std::vector<StabilityRow>> measure_build(const MeasureSpec& spec, std::sp
   build.methods = spec.methods.empty() ? supported_methods() : spec.methods;
   build.load = spec.load;
   build.open_exit_at_far_plane = spec.open_exit_at_far_plane;
+  build.close_nearly_closed = spec.close_nearly_closed;
   build.receivers = spec.receivers;
   build.cap_exits_at_receiver_surfaces = true;  // the suite measures `build --exit-caps` (STABILITY.md)
   build.overwrite = true;
@@ -64,7 +72,9 @@ Result<std::vector<StabilityRow>> measure_build(const MeasureSpec& spec, std::sp
       if (!accuracy) return accuracy.error();
       StabilityRow row;
       row.subject = spec.subject;
-      row.method = spec.open_exit_at_far_plane ? name + " [far-plane exit]" : name;
+      row.method = spec.open_exit_at_far_plane ? name + " [far-plane exit]"
+                   : spec.close_nearly_closed   ? name + " [nearly closed]"
+                                                : name;
       row.resolution = spec.resolution;
       row.elevation = spec.elevation;
       row.receivers = accuracy->receivers;
@@ -74,7 +84,11 @@ Result<std::vector<StabilityRow>> measure_build(const MeasureSpec& spec, std::sp
       row.worse_than_raw = accuracy->worse_than_raw;
       row.bytes = uint64_t(number_at(stats, "bytes_by_method", name) + number_at(stats, "top_bytes_by_method", name));
       row.build_seconds = depth_seconds + number_at(stats, "encode_seconds_by_method", name);
-      if (is_raw) row.note = "exit texels " + std::to_string(uint64_t(stats.value("exit_texels", 0.0)));
+      if (is_raw || spec.close_nearly_closed)
+        row.note = "exit texels " + std::to_string(uint64_t(stats.value("exit_texels", 0.0)));
+      if (spec.close_nearly_closed && is_raw)
+        row.note += fmt::format(", {} of {} triangles nearly closed", nearly_closed_triangles(stats),
+                                uint64_t(number_at(stats, "scene", "triangles")));
       rows.push_back(std::move(row));
     }
   }
