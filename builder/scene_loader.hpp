@@ -64,7 +64,7 @@ struct LoadOptions {
   // Accept nearly closed meshes as solids (builder/nearly_closed_meshes.hpp: the winding-number test,
   // patches over their holes). Only meaningful under the `anywhere` contract; the build records it.
   bool close_nearly_closed = false;
-  NearlyClosedOptions nearly_closed;
+  NearlyClosedOptions nearly_closed = {};
 };
 
 struct LoadStats {
