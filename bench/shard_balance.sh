@@ -3,7 +3,7 @@
 # work parts), then the N shards built one after another with per-tile CPU seconds (--tile-costs),
 # each under the bench lock; prints planned and measured max/mean per scene. The per-tile files it
 # leaves (OUT_DIR/NAME.plan.json, NAME.shardI.json) feed bench/tile_cost_fit.py.
-# Usage: bench/shard_balance.sh SHADOWTILES [OUT_DIR]   env: RES (16384) TILE (1024) SHARDS (4) THREADS (2)
+# Usage: bench/shard_balance.sh SHADOWTILES [OUT_DIR]   env: RES (16384) TILE (1024) SHARDS (4) THREADS (2) BENCH_LOCK (a lock file: each shard build runs under flock)
 #        SCENES ("name:file:up ...", default all seven shared scenes)
 set -euo pipefail
 bin=$(realpath "$1")
@@ -23,7 +23,7 @@ for spec in $list; do
   "$bin" build "${args[@]}" --plan-shards "$n" --tile-costs > "$out/$name.plan.json" 2>/dev/null
   for ((i = 0; i < n; i++)); do
     rm -rf "$out/store"
-    flock /work/bench.lock "$bin" build "${args[@]}" -j "$threads" --json --tile-costs --shard "$i/$n" \
+    ${BENCH_LOCK:+flock "$BENCH_LOCK"} "$bin" build "${args[@]}" -j "$threads" --json --tile-costs --shard "$i/$n" \
       --out "$out/store" > "$out/$name.shard$i.json" 2> "$out/$name.shard$i.log"
   done
   rm -rf "$out/store"

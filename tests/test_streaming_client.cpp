@@ -45,8 +45,13 @@ using testing::TempDir;
 constexpr const char* kBunny = "bunny/stanford-bunny.obj";
 constexpr size_t kPoints = 10000;
 
+// The bunny as an open scan (--no-nearly-closed): full-depth trees, so tiles are large enough for the
+// small caches below to evict.
 BuildConfig bunny_config(const std::filesystem::path& out, std::vector<store::Method> methods) {
-  return testing::shared_scene_config({kBunny, UpAxis::y, false}, out, 1024, 128, std::move(methods), 135, 45);
+  BuildConfig config =
+      testing::shared_scene_config({kBunny, UpAxis::y, false}, out, 1024, 128, std::move(methods), 135, 45);
+  config.close_nearly_closed = false;
+  return config;
 }
 
 void copy_store(const std::filesystem::path& from, const std::filesystem::path& to) {
