@@ -284,9 +284,13 @@ class PlyChecker {
     std::string line;
     std::vector<std::string_view> words;
     uint64_t line_number = 0;
+    bool nul_byte = false;
     auto next_data_line = [&] {
       while (std::getline(in, line)) {
         ++line_number;
+        // assimp 5.2 reads an ascii body as a C string: a NUL byte ends it there, and a body that
+        // ends early is read on past its end (found by fuzz_scene_loader: a 2 GB allocation).
+        if (line.find('\0') != std::string::npos) return !(nul_byte = true);
         words = split_words(line);
         if (!words.empty()) return true;
       }
@@ -294,9 +298,13 @@ class PlyChecker {
     };
     for (const PlyElement& element : header_.elements) {
       for (uint64_t instance = 0; instance < element.count; ++instance) {
-        if (!next_data_line())
+        if (!next_data_line()) {
+          if (nul_byte)
+            return fail(fmt::format("a NUL byte in the ascii body (line {}), which ends it for the importer",
+                                    line_number));
           return fail(fmt::format("the body ends at element '{}' #{} of {} (truncated file)", element.name, instance,
                                   element.count));
+        }
         if (!element.has_list()) continue;
         size_t word = 0;
         for (const PlyProperty& p : element.properties) {
@@ -378,21 +386,34 @@ Status check_off_file(const std::filesystem::path& file, uint64_t file_size) {
   if (!in) return make_error(ErrorCode::io_error, fmt::format("{}: cannot open", file.string()));
   in.seekg(std::streamoff(std::min(pos, head.size())));
   std::string line;
+  bool nul_byte = false;
   auto next_data_line = [&](std::vector<std::string_view>* words) {
     while (std::getline(in, line)) {
+      // As for PLY: assimp 5.2 reads the text as a C string, so a NUL byte ends the file there.
+      if (line.find('\0') != std::string::npos) return !(nul_byte = true);
       *words = split_words(line);
       if (!words->empty()) return true;
     }
     return false;
   };
+  const auto nul_error = [&] { return fail("a NUL byte in the body, which ends it for the importer"); };
   std::vector<std::string_view> words;
   for (uint64_t v = 0; v < vertices; ++v)
-    if (!next_data_line(&words)) return Status::success();  // short: assimp reports it
+    if (!next_data_line(&words)) {
+      if (nul_byte) return nul_error();
+      return Status::success();  // short: assimp reports it
+    }
   for (uint64_t f = 0; f < faces; ++f) {
-    if (!next_data_line(&words)) return Status::success();
+    if (!next_data_line(&words)) {
+      if (nul_byte) return nul_error();
+      return Status::success();
+    }
     uint64_t n = 0;
     if (!parse_count(words[0], &n))
       return fail(fmt::format("face #{} does not start with its vertex count ('{}')", f, words[0].substr(0, 32)));
+    // assimp 5.2 drops a face of no vertex and keeps a mesh with fewer faces than it allocated, which
+    // crashed it (SEGV inside ReadFile, found by fuzz_scene_loader: "OFF\n81 1 0" whose one face is "0 ...").
+    if (n == 0) return fail(fmt::format("face #{} has no vertices", f));
     if (n > words.size() - 1)
       return fail(fmt::format("face #{} declares {} vertices and lists {}", f, n, words.size() - 1));
     for (uint64_t i = 1; i <= n; ++i) {

@@ -117,7 +117,8 @@ void post_binary(ServiceState& state, const ShadowMap& map, const httplib::Reque
   state.metrics.add_points(points->size());
   std::string body(result->lit.size() * 4, '\0');
   if constexpr (std::endian::native == std::endian::little) {
-    std::memcpy(body.data(), result->lit.data(), body.size());  // the wire order already
+    // An empty batch has no answer buffer (data() may be null, which memcpy must not get).
+    if (!body.empty()) std::memcpy(body.data(), result->lit.data(), body.size());  // the wire order already
   } else {
     for (size_t i = 0; i < result->lit.size(); ++i) {
       uint32_t bits = std::bit_cast<uint32_t>(result->lit[i]);

@@ -162,6 +162,31 @@ TEST(MeshFilePrechecks, OffCountsMustBeIntegers) {
   EXPECT_EQ(load_ok(dir.path() / "ok.off").triangle_count(), 1u);
 }
 
+TEST(MeshFilePrechecks, NulByteInAnAsciiBodyIsRefused) {
+  // fuzz_scene_loader regression (ply-ascii-nul-byte-in-body): assimp 5.2 reads an ascii body as a C
+  // string, so a NUL byte ends it early and the importer read on past the end (over 2 GB).
+  TempDir dir;
+  const std::string ply_header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  write_file(dir.path() / "nul.ply", ply_header + "0 0 0\n1 0 0\n0 1" + std::string(1, '\0') + "0\n3 0 1 2\n");
+  expect_refused(dir.path() / "nul.ply", "a NUL byte in the ascii body");
+  write_file(dir.path() / "nul.off", "OFF\n3 1 0\n0 0 0\n1 0" + std::string(1, '\0') + " 0\n0 1 0\n3 0 1 2\n");
+  expect_refused(dir.path() / "nul.off", "a NUL byte in the body");
+  write_file(dir.path() / "ok.ply", ply_header + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(load_ok(dir.path() / "ok.ply").triangle_count(), 1u);
+}
+
+TEST(MeshFilePrechecks, OffFaceOfNoVertexIsRefused) {
+  // fuzz_scene_loader regression (off-face-of-no-vertex): the one face of an 81-vertex file was "0 255.283";
+  // assimp 5.2 drops such a face, keeps the mesh with fewer faces than it allocated, and crashed (SEGV).
+  TempDir dir;
+  write_file(dir.path() / "empty-face.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n0 255.283\n");
+  expect_refused(dir.path() / "empty-face.off", "face #0 has no vertices");
+  write_file(dir.path() / "ok.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(load_ok(dir.path() / "ok.off").triangle_count(), 1u);
+}
+
 TEST(MeshFilePrechecks, OffFacesMustNameTheirVertices) {
   // fuzz_scene_loader regression (off-face-count-beyond-its-line): assimp 5.2 reads a face's indices
   // without checking them; a face line "90.000 240.000 373.413" (a vertex line where a face was

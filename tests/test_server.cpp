@@ -155,6 +155,13 @@ TEST_F(ServerTest, AnswersEqualTheDecoderForEveryMethod) {
     EXPECT_EQ(binary->get_header_value("X-Shadow-Outside-Map"), "2");
     auto lit = decode_floats(binary->body);
     ASSERT_EQ(lit.size(), points.size());
+    // An empty batch is a valid empty answer (fuzz_http regression binary-batch-of-no-point: the
+    // answer's memcpy got a null buffer, undefined behaviour caught by UBSan).
+    auto none = cli.Post(("/v1/shadow?pcf=3&method=" + name).c_str(), std::string(), "application/octet-stream");
+    ASSERT_TRUE(none);
+    EXPECT_EQ(none->status, 200) << none->body;
+    EXPECT_TRUE(none->body.empty());
+    EXPECT_EQ(none->get_header_value("X-Shadow-Outside-Map"), "0");
     auto as_json = cli.Post("/v1/shadow", json{{"points", points_json(rounded)}, {"method", name}}.dump(),
                             "application/json");
     ASSERT_TRUE(as_json);
