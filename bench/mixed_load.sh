@@ -18,6 +18,8 @@
 # Prints one line starting "mixed load:" with the figures (scripts/reliability.sh reads it).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=bench/serve_start.sh
+source bench/serve_start.sh
 BUILD_DIR=${1:-build}
 SCENE=${2:-../shared/scenes/bunny/stanford-bunny.obj}
 DURATION=${DURATION:-60}
@@ -46,18 +48,7 @@ cat > "$WORK/serve.json" << 'EOF'
 {"threads": 2, "max_connections": 64, "cache_bytes": 4194304, "read_timeout_s": 2, "body_timeout_s": 2,
  "write_timeout_s": 5, "reload_poll_s": 0}
 EOF
-"$CLI" serve "$WORK/store" --config "$WORK/serve.json" --port 0 -q > "$WORK/serve.log" 2>&1 &
-SERVER_PID=$!
-PORT=""
-for _ in $(seq 100); do
-  PORT=$(sed -n 's/^listening on http:\/\/[^:]*:\([0-9]*\)$/\1/p' "$WORK/serve.log" | head -1)
-  [ -n "$PORT" ] && break
-  kill -0 "$SERVER_PID" 2> /dev/null || { cat "$WORK/serve.log" >&2; exit 1; }
-  sleep 0.1
-done
-[ -n "$PORT" ] || { echo "server did not start" >&2; exit 1; }
-BASE="http://127.0.0.1:$PORT"
-for _ in $(seq 100); do curl -sf "$BASE/healthz" > /dev/null && break; sleep 0.1; done
+start_serve "$CLI" "$WORK/store" "$WORK/serve.log" --config "$WORK/serve.json" || exit 1
 curl -sf "$BASE/v1/meta" > "$WORK/meta.json"
 
 # wrk's valid mix: point GETs (a tenth with a 3x3 PCF kernel), tile GETs, 8-point JSON batches,

@@ -19,6 +19,8 @@
 #      axis, default y).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=bench/serve_start.sh
+source bench/serve_start.sh
 BUILD_DIR=${1:-build}
 SCENE=${2:-../shared/scenes/bunny/stanford-bunny.obj}
 RESOLUTION=${3:-2048}
@@ -53,18 +55,7 @@ echo "== building $SCENE at ${RESOLUTION}^2, tiles ${TILE}^2, methods $BUILD_MET
 "$CLI" build "$SCENE" --up "$UP" --resolution "$RESOLUTION" --tile "$TILE" --method "$BUILD_METHODS" \
   --out "$WORK/store" -q > /dev/null
 
-"$CLI" serve "$WORK/store" --port 0 --threads "$THREADS" -q > "$WORK/serve.log" 2>&1 &
-SERVER_PID=$!
-PORT=""
-for _ in $(seq 100); do
-  PORT=$(sed -n 's/^listening on http:\/\/[^:]*:\([0-9]*\)$/\1/p' "$WORK/serve.log" | head -1)
-  [ -n "$PORT" ] && break
-  kill -0 "$SERVER_PID" 2> /dev/null || { cat "$WORK/serve.log" >&2; exit 1; }
-  sleep 0.1
-done
-[ -n "$PORT" ] || { echo "server did not start" >&2; exit 1; }
-BASE="http://127.0.0.1:$PORT"
-curl -sf "$BASE/healthz" > /dev/null
+start_serve "$CLI" "$WORK/store" "$WORK/serve.log" --threads "$THREADS" || exit 1
 curl -sf "$BASE/v1/meta" > "$WORK/meta.json"
 echo "== server on $BASE, $THREADS threads, $(nproc) cores (wrk shares them)"
 

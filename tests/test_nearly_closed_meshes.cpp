@@ -223,21 +223,23 @@ TEST(NearlyClosed, FlippedFaceIsRefused) {
   EXPECT_EQ(exits(render(scene).tile), 0u);
 }
 
+// An axis-aligned box [lo, hi] appended to the vertices and triangles, outward facing.
+void add_box(std::vector<Vec3>& v, Triangles& t, Vec3 lo, Vec3 hi) {
+  const uint32_t base = uint32_t(v.size());
+  for (int i = 0; i < 8; ++i) v.push_back({(i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]});
+  const Triangles faces{{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                        {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  for (auto f : faces) t.push_back({f[0] + base, f[1] + base, f[2] + base});
+}
+
 TEST(NearlyClosed, TouchingPartsWithAFaceBetweenThemAreRefused) {
   // Two boxes sharing a whole face, both faces kept (as IFC exports beams that touch): the mesh is a
   // cycle (the shared face's edges are used four times, balanced), but the faces between the boxes
   // lie inside the solid with winding number 1 on both sides: real receivers there would be inside.
   std::vector<Vec3> v;
   Triangles t;
-  auto box = [&](Vec3 lo, Vec3 hi) {
-    const uint32_t base = uint32_t(v.size());
-    for (int i = 0; i < 8; ++i) v.push_back({(i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]});
-    Triangles faces{{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
-                    {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
-    for (auto f : faces) t.push_back({f[0] + base, f[1] + base, f[2] + base});
-  };
-  box({-1, -1, -1}, {0, 1, 1});
-  box({0, -1, -1}, {1, 1, 1});
+  add_box(v, t, {-1, -1, -1}, {0, 1, 1});
+  add_box(v, t, {0, -1, -1}, {1, 1, 1});
   Scene scene;
   scene.add_mesh("touching boxes", v, t);
   EXPECT_EQ(scene.meshes[0].kind, MeshKind::open);
@@ -293,15 +295,8 @@ TEST(NearlyClosed, BalancedNonManifoldEdgesNeedNoPatch) {
   // each way. The mesh is a cycle already; it is accepted with no patch.
   std::vector<Vec3> v;
   Triangles t;
-  auto box = [&](Vec3 lo, Vec3 hi) {
-    const uint32_t base = uint32_t(v.size());
-    for (int i = 0; i < 8; ++i) v.push_back({(i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]});
-    Triangles faces{{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
-                    {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
-    for (auto f : faces) t.push_back({f[0] + base, f[1] + base, f[2] + base});
-  };
-  box({-1, -1, -1}, {0, 0, 1});
-  box({0, 0, -1}, {1, 1, 1});
+  add_box(v, t, {-1, -1, -1}, {0, 0, 1});
+  add_box(v, t, {0, 0, -1}, {1, 1, 1});
   Scene scene;
   scene.add_mesh("boxes", v, t);
   EXPECT_EQ(scene.meshes[0].kind, MeshKind::open);
