@@ -129,48 +129,34 @@ TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile) 
     out.push_back(float(p.v - v0));
     out.push_back(float(p.depth));
   };
+  // One triangle into the closed or the open set: its vertices, per-triangle flags and depth plane.
+  auto add = [&](bool closed, uint32_t a_id, uint32_t b_id, uint32_t c_id, bool heightfield, bool patch) {
+    const LightSpacePoint& a = scene.vertex(a_id);
+    const LightSpacePoint& b = scene.vertex(b_id);
+    const LightSpacePoint& c = scene.vertex(c_id);
+    auto& set = closed ? geometry.closed : geometry.open;
+    auto& vertices = closed ? geometry.closed_vertices : geometry.open_vertices;
+    emit(vertices, a);
+    emit(vertices, b);
+    emit(vertices, c);
+    set.front.push_back(faces_light(a, b, c) ? 1 : 0);
+    set.heightfield.push_back(heightfield ? 1 : 0);
+    set.slack.push_back(exit_slack(a, b, c));
+    set.patch.push_back(patch ? 1 : 0);
+    (closed ? geometry.closed_planes : geometry.open_planes).push_back(DepthPlane::of(a, b, c));
+  };
   for (uint32_t t : scene.triangles_of(tile)) {
     const auto& tri = world.triangles[t];
-    const LightSpacePoint& a = scene.vertex(tri[0]);
-    const LightSpacePoint& b = scene.vertex(tri[1]);
-    const LightSpacePoint& c = scene.vertex(tri[2]);
-    MeshKind kind = world.meshes[world.triangle_mesh[t]].kind;
-    if (kind != MeshKind::open) {
-      emit(geometry.closed_vertices, a);
-      emit(geometry.closed_vertices, b);
-      emit(geometry.closed_vertices, c);
-      geometry.closed.front.push_back(faces_light(a, b, c) ? 1 : 0);
-      geometry.closed.heightfield.push_back(kind == MeshKind::heightfield ? 1 : 0);
-      geometry.closed.slack.push_back(exit_slack(a, b, c));
-      geometry.closed.patch.push_back(0);
-      geometry.closed_planes.push_back(DepthPlane::of(a, b, c));
-    } else {
-      emit(geometry.open_vertices, a);
-      emit(geometry.open_vertices, b);
-      emit(geometry.open_vertices, c);
-      geometry.open.front.push_back(faces_light(a, b, c) ? 1 : 0);
-      geometry.open.heightfield.push_back(0);
-      geometry.open.slack.push_back(exit_slack(a, b, c));
-      geometry.open.patch.push_back(0);
-      geometry.open_planes.push_back(DepthPlane::of(a, b, c));
-      ++geometry.open_count;
-    }
+    const MeshKind kind = world.meshes[world.triangle_mesh[t]].kind;
+    const bool closed = kind != MeshKind::open;
+    add(closed, tri[0], tri[1], tri[2], kind == MeshKind::heightfield, false);
+    if (!closed) ++geometry.open_count;
   }
   // Patches close nearly closed meshes for the exit counter only (resolve_interval never takes one for
   // the first hit); they join the closed geometry, whose hits are all collected.
   for (uint32_t t : scene.patches_of(tile)) {
     const auto& tri = world.patch_triangles[t];
-    const LightSpacePoint& a = scene.vertex(tri[0]);
-    const LightSpacePoint& b = scene.vertex(tri[1]);
-    const LightSpacePoint& c = scene.vertex(tri[2]);
-    emit(geometry.closed_vertices, a);
-    emit(geometry.closed_vertices, b);
-    emit(geometry.closed_vertices, c);
-    geometry.closed.front.push_back(faces_light(a, b, c) ? 1 : 0);
-    geometry.closed.heightfield.push_back(0);
-    geometry.closed.slack.push_back(exit_slack(a, b, c));
-    geometry.closed.patch.push_back(1);
-    geometry.closed_planes.push_back(DepthPlane::of(a, b, c));
+    add(true, tri[0], tri[1], tri[2], false, true);
   }
   return geometry;
 }
