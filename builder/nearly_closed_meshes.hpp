@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "builder/scene.hpp"
+#include "codec/store_meta.hpp"
 
 namespace shadowtiles {
 
@@ -100,5 +101,17 @@ double winding_number(const std::vector<Vec3>& vertices, std::span<const std::ar
 // appended to scene.patch_triangles / patch_mesh (centroids to scene.vertices). Logs one line per mesh
 // tested and a summary (spdlog info).
 NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOptions& options);
+
+// The options a store was built with (its meta), to close a scene the way its build did.
+inline NearlyClosedOptions nearly_closed_options(const StoreMeta& meta) {
+  NearlyClosedOptions options;
+  options.tolerance = meta.nearly_closed_tolerance;
+  options.max_ambiguous_area = meta.nearly_closed_max_ambiguous_area;
+  options.max_samples = meta.nearly_closed_max_samples;
+  options.max_patch_triangles = meta.nearly_closed_max_patch_triangles;
+  options.min_full_samples = meta.nearly_closed_min_full_samples;
+  options.full_budget = meta.nearly_closed_full_budget;
+  return options;
+}
 
 }  // namespace shadowtiles

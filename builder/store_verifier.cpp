@@ -82,14 +82,7 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
   std::optional<Scene> closed_copy;
   if (meta.nearly_closed && !scene.nearly_closed_tested) {
     closed_copy = scene;
-    NearlyClosedOptions closing;
-    closing.tolerance = meta.nearly_closed_tolerance;
-    closing.max_ambiguous_area = meta.nearly_closed_max_ambiguous_area;
-    closing.max_samples = meta.nearly_closed_max_samples;
-    closing.max_patch_triangles = meta.nearly_closed_max_patch_triangles;
-    closing.min_full_samples = meta.nearly_closed_min_full_samples;
-    closing.full_budget = meta.nearly_closed_full_budget;
-    close_nearly_closed_meshes(*closed_copy, closing);
+    close_nearly_closed_meshes(*closed_copy, nearly_closed_options(meta));
   } else if (!meta.nearly_closed && !scene.patch_triangles.empty()) {
     return make_error(ErrorCode::invalid_input,
                       "the scene was loaded with nearly closed meshes accepted as solids; the store was built without");

@@ -9,6 +9,7 @@
 
 #include "builder/accuracy.hpp"
 #include "bench/harness/camera_receivers.hpp"
+#include "builder/solid_interior.hpp"
 #include "bench/harness/lookup_rate.hpp"
 #include "bench/harness/machine_info.hpp"
 #include "bench/harness/store_sizes.hpp"
@@ -57,6 +58,7 @@ struct SceneData {
   std::vector<Receiver> uniform, camera;
   std::vector<Vec3> batch;  // config.batch_points surface points, shuffled
   std::vector<uint8_t> uniform_truth, camera_truth;
+  size_t uniform_inside_solids = 0, camera_inside_solids = 0;  // left out: no receiver places
 };
 
 // Everything measured on one built store, per method: one row each.
@@ -146,6 +148,7 @@ Status measure_store(const BenchConfig& config, const SceneSpec& spec, uint32_t 
                               is_raw ? &raw_uniform : nullptr);
     if (!acc) return acc.error();
     row["receivers"] = acc->receivers;
+    row["receivers_inside_solids"] = data.uniform_inside_solids;
     row["error_rate"] = acc->error_rate();
     row["false_lit"] = acc->false_lit;
     row["false_shadowed"] = acc->false_shadowed;
@@ -292,10 +295,14 @@ Status run_bench(const BenchConfig& config, const std::filesystem::path& out_dir
       data.batch.push_back(r.position);
     std::shuffle(data.batch.begin(), data.batch.end(), std::mt19937_64(config.seed + 2));
     data.camera = camera_receivers(*device, data.scene, spec.up, spec.camera);
+    // Receivers inside solids are no receivers under either contract (builder/solid_interior.hpp).
+    data.uniform_inside_solids = drop_receivers_inside_solids(*device, data.scene, data.light, data.uniform);
+    data.camera_inside_solids = drop_receivers_inside_solids(*device, data.scene, data.light, data.camera);
     GroundTruth truth(*device, data.scene, data.light);
     data.uniform_truth = point_truth(truth, data.uniform);
     data.camera_truth = point_truth(truth, data.camera);
-    spdlog::info("  {} uniform receivers, {} camera receivers", data.uniform.size(), data.camera.size());
+    spdlog::info("  {} uniform receivers, {} camera receivers ({} and {} inside solids left out)", data.uniform.size(),
+                 data.camera.size(), data.uniform_inside_solids, data.camera_inside_solids);
 
     Json scene_rows = Json::array();
     for (uint32_t resolution : spec.resolutions) {
