@@ -407,6 +407,56 @@ uint32_t MhTileView::pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32
 }
 
 template <unsigned W>
+void MhTileView::lit_interleaved_impl(std::span<const TexelQuery> queries, unsigned stop, uint8_t* lit) const {
+  // Independent walks, one level at a time in turn, each prefetching its next block: the misses of
+  // kLanes walks overlap instead of following one another.
+  constexpr unsigned kLanes = 8;
+  const unsigned L = levels_;
+  const uint32_t mask = size_ - 1;
+  struct Lane {
+    WalkState s;
+    unsigned level;
+    uint32_t u, v;
+    size_t index;
+  };
+  Lane lanes[kLanes];
+  size_t next = 0;
+  auto prefetch = [&](const WalkState& s) {
+    if (s.mask == 0) return;
+    __builtin_prefetch(stream_ + s.offset);
+    __builtin_prefetch(stream_ + s.offset + F::block_bytes(s.mask, W) - 1);
+  };
+  auto start = [&](Lane& lane) {
+    lane.index = next++;
+    lane.u = queries[lane.index].u & mask;
+    lane.v = queries[lane.index].v & mask;
+    lane.s = start_state(lane.u, lane.v, stop, &lane.level);
+    prefetch(lane.s);
+  };
+  unsigned live = 0;
+  for (; live < kLanes && next < queries.size(); ++live) start(lanes[live]);
+  while (live > 0) {
+    for (unsigned i = 0; i < live;) {
+      Lane& lane = lanes[i];
+      if (lane.s.mask != 0 && lane.level < stop &&
+          step<W>(stream_, child_index(lane.u, lane.v, L - 1 - lane.level), lane.s)) {
+        ++lane.level;
+        prefetch(lane.s);
+        ++i;
+        continue;
+      }
+      lit[lane.index] = queries[lane.index].threshold <= lane.s.value;
+      if (next < queries.size()) {
+        start(lane);
+        ++i;
+      } else {
+        lane = lanes[--live];  // the last live lane takes this slot (visited next)
+      }
+    }
+  }
+}
+
+template <unsigned W>
 void MhTileView::lit_sorted_impl(std::span<const TexelQuery> queries, unsigned stop, uint8_t* lit) const {
   const unsigned L = levels_;
   const uint32_t mask = size_ - 1;
@@ -437,8 +487,33 @@ void MhTileView::lit_sorted_impl(std::span<const TexelQuery> queries, unsigned s
   }
 }
 
+bool MhTileView::sparse_queries(std::span<const TexelQuery> queries, unsigned stop) const {
+  // Sparse: most neighbours along the curve share no node within 2 levels of the walks' end, so
+  // resuming from a shared node saves little and interleaving independent walks overlaps misses.
+  // (fzk_haus 16384² under anywhere, 1M shuffled points: 5.9 -> 6.8 M/s on 1 thread, 11.9 -> 12.9 on 2;
+  // nefertiti, whose
+  // walks are short, unchanged.)
+  if (queries.size() < 16 || stop < 4 + skip_level_) return false;
+  const unsigned L = levels_;
+  const uint32_t mask = size_ - 1;
+  size_t close = 0;
+  for (size_t i = 1; i < queries.size(); ++i) {
+    const uint32_t du = (queries[i].u ^ queries[i - 1].u) & mask, dv = (queries[i].v ^ queries[i - 1].v) & mask;
+    close += L - unsigned(std::bit_width(du | dv)) + 2 >= stop;
+  }
+  return close * 2 < queries.size();
+}
+
 void MhTileView::lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const {
   const unsigned stop = std::min(max_level, levels_);
+  if (offset_width_ >= 1 && offset_width_ <= 4 && sparse_queries(queries, stop)) {
+    switch (offset_width_) {
+      case 1: return lit_interleaved_impl<1>(queries, stop, lit);
+      case 2: return lit_interleaved_impl<2>(queries, stop, lit);
+      case 3: return lit_interleaved_impl<3>(queries, stop, lit);
+      default: return lit_interleaved_impl<4>(queries, stop, lit);
+    }
+  }
   switch (offset_width_) {
     case 1: return lit_sorted_impl<1>(queries, stop, lit);
     case 2: return lit_sorted_impl<2>(queries, stop, lit);

@@ -81,7 +81,9 @@ class MhTileView {
 
   // Batch: lit[i] = threshold_i <= lookup(u_i, v_i, max_level). Queries sorted along the Morton
   // curve share their descents: each resumes from the deepest node shared with the previous one.
-  // Preconditions as lookup().
+  // Sparse queries (few neighbours sharing a deep node: a batch spread over a deep tree) are walked
+  // independently instead, 8 at a time in turn with a prefetch of each next block, so their cache
+  // misses overlap. Preconditions as lookup().
   void lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const;
 
   // Batch PCF: counts[i] = pcf_lit_count(c.u, c.v, k, k, c.threshold, 0) for k x k boxes with lower
@@ -105,6 +107,9 @@ class MhTileView {
   uint32_t pcf_count_impl(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth, float bias) const;
   template <unsigned W>
   void lit_sorted_impl(std::span<const TexelQuery> queries, unsigned stop, uint8_t* lit) const;
+  template <unsigned W>
+  void lit_interleaved_impl(std::span<const TexelQuery> queries, unsigned stop, uint8_t* lit) const;
+  bool sparse_queries(std::span<const TexelQuery> queries, unsigned stop) const;
   WalkState start_state(uint32_t u, uint32_t v, unsigned max_level, unsigned* level) const;
 
   const uint8_t* stream_ = nullptr;

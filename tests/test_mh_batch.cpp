@@ -1,0 +1,72 @@
+// MH/MMH batch point lookups against the per-query ones: lit_sorted == threshold <= lookup() for
+// dense Morton-sorted queries (shared descents) and for sparse ones spread over deep trees (the
+// interleaved walks with prefetch), for every skip-list level, MH and MMH, and for unsorted input.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <vector>
+
+#include "builder/mh_builder.hpp"
+#include "builder/mh_encoder.hpp"
+#include "builder/mh_synthetic.hpp"
+#include "builder/mmh_merger.hpp"
+#include "codec/mh_decoder.hpp"
+#include "codec/morton.hpp"
+
+namespace shadowtiles {
+namespace {
+
+// `count` random texels of a size^2 tile, Morton-sorted when `sorted`, thresholds near the stored values.
+std::vector<TexelQuery> queries(const MhTileView& view, uint32_t size, size_t count, bool sorted, std::mt19937& rng) {
+  std::vector<std::pair<uint64_t, TexelQuery>> keyed;
+  for (size_t i = 0; i < count; ++i) {
+    const uint32_t u = rng() % size, v = rng() % size;
+    const float threshold = view.lookup(u, v) + (float(rng() % 200) - 100.0f) * 1e-4f;
+    keyed.push_back({morton_encode(u, v), TexelQuery{u, v, threshold}});
+  }
+  if (sorted) std::sort(keyed.begin(), keyed.end(), [](auto& a, auto& b) { return a.first < b.first; });
+  std::vector<TexelQuery> out;
+  for (auto& [key, q] : keyed) out.push_back(q);
+  return out;
+}
+
+TEST(MhBatch, SortedAndSparseBatchesEqualPerQueryLookups) {
+  constexpr uint32_t kSize = 1024;  // 10 levels: deep enough below every skip level for sparse walks
+  std::mt19937 rng(11);
+  for (MhSyntheticKind kind : {MhSyntheticKind::random_intervals, MhSyntheticKind::noisy_plane,
+                               MhSyntheticKind::steps, MhSyntheticKind::boxes_and_misses}) {
+    const TileIntervals tile = make_synthetic_tile(kind, kSize, 5);
+    auto tree = build_mh(tile);
+    ASSERT_TRUE(tree.ok());
+    auto merged = merge_mmh(*tree);
+    ASSERT_TRUE(merged.ok());
+    for (const MhHierarchy* h : {&*tree, &*merged}) {
+      auto bytes = encode_mh(*h);
+      ASSERT_TRUE(bytes.ok());
+      for (unsigned skip : {0u, 3u, 6u}) {
+        MhParseOptions options;
+        options.skip_level = skip;
+        auto view = MhTileView::parse(*bytes, options);
+        ASSERT_TRUE(view.ok());
+        // 300 points over 1M texels: sparse (interleaved walks); 20,000: dense (shared descents);
+        // 2,000 unsorted; 9 (below the sparse test's minimum); and coarser levels.
+        for (size_t count : {300u, 20000u, 2000u, 9u}) {
+          const bool sorted = count != 2000;
+          const std::vector<TexelQuery> q = queries(*view, kSize, count, sorted, rng);
+          for (unsigned max_level : {kMhAllLevels, 9u, 7u}) {
+            std::vector<uint8_t> lit(q.size(), 2);
+            view->lit_sorted(q, max_level, lit.data());
+            for (size_t i = 0; i < q.size(); ++i)
+              ASSERT_EQ(lit[i], q[i].threshold <= view->lookup(q[i].u, q[i].v, max_level) ? 1 : 0)
+                  << synthetic_kind_name(kind) << " skip " << skip << " count " << count << " level " << max_level
+                  << " query " << i;
+          }
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace shadowtiles
