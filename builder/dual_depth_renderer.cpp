@@ -296,9 +296,11 @@ DualDepthRenderer::DualDepthRenderer(const EmbreeDevice& device, const LightSpac
                                      DualDepthOptions options)
     : device_(device), scene_(scene), options_(options) {}
 
-Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepthStats* stats) const {
+Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepthStats* stats,
+                                                      RenderBuffers* buffers) const {
   const uint32_t size = scene_.layout().tile_size();
   TileIntervals intervals;
+  if (buffers) intervals = std::move(buffers->intervals);
   intervals.size = size;
   intervals.texels.assign(size_t(size) * size, DepthInterval{});
   DualDepthStats local;
@@ -388,19 +390,22 @@ bool DualDepthRenderer::caps_apply() const {
   return options_.cap_exits_at_receiver_surfaces && !options_.open_exit_at_far_plane;
 }
 
-Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* stats) const {
+Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* stats, RenderBuffers* buffers) const {
   DualDepthStats local;
-  auto intervals = render_centre(tile, &local);
+  auto intervals = render_centre(tile, &local, buffers);
   if (!intervals) return intervals.error();
   auto cap_start = Clock::now();
   if (caps_apply() && !scene_.triangles_of(tile).empty()) {
     // Cap every exit by the receiver surfaces inside its texel (receiver_surface_caps under
     // `anywhere`, second_layer_caps under `surfaces`).
-    const std::vector<float> caps =
+    std::vector<float> storage = buffers ? std::move(buffers->caps) : std::vector<float>{};
+    std::vector<float> caps =
         options_.receivers == ReceiverContract::surfaces
-            ? second_layer_caps(device_.get(), scene_, tile, options_.coplanar_epsilon, *intervals, options_.exit_margin)
-            : receiver_surface_caps(scene_, tile);
+            ? second_layer_caps(device_.get(), scene_, tile, options_.coplanar_epsilon, *intervals, options_.exit_margin,
+                                nullptr, std::move(storage))
+            : receiver_surface_caps(scene_, tile, nullptr, std::move(storage));
     apply_exit_caps(*intervals, caps, options_.exit_margin);
+    if (buffers) buffers->caps = std::move(caps);
   }
   local.cap_seconds = seconds_since(cap_start);
   local.exits = 0;

@@ -235,10 +235,12 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
   }
 }
 
-std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord tile, ReceiverCapCounts* counts) {
+std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord tile, ReceiverCapCounts* counts,
+                                         std::vector<float> storage) {
   const uint32_t size = scene.layout().tile_size();
   const TexelWindow window{double(tile.x) * size, double(tile.y) * size, size};
-  std::vector<float> cap(size_t(size) * size, std::numeric_limits<float>::infinity());
+  std::vector<float> cap = std::move(storage);
+  cap.assign(size_t(size) * size, std::numeric_limits<float>::infinity());
   const Scene& world = scene.scene();
   for (uint32_t t : scene.triangles_of(tile)) {
     const auto& tri = world.triangles[t];

@@ -45,8 +45,9 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
                             const TexelWindow& window, std::span<float> cap, ReceiverCapCounts* counts = nullptr);
 
 // The cap per texel of `tile` (+inf where nothing limits it), over the tile's triangles that a
-// shadowed receiver can lie on.
+// shadowed receiver can lie on. `storage`: a buffer to reuse (its pages already mapped), e.g. the
+// previous tile's caps.
 std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord tile,
-                                         ReceiverCapCounts* counts = nullptr);
+                                         ReceiverCapCounts* counts = nullptr, std::vector<float> storage = {});
 
 }  // namespace shadowtiles

@@ -229,10 +229,12 @@ std::vector<std::pair<uint32_t, uint32_t>> overlapping_pairs(RTCDevice device, c
 }  // namespace
 
 std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
-                                     const TileIntervals& intervals, float exit_margin, SecondLayerCapCounts* counts) {
+                                     const TileIntervals& intervals, float exit_margin, SecondLayerCapCounts* counts,
+                                     std::vector<float> storage) {
   const uint32_t size = scene.layout().tile_size();
   const TexelWindow window{double(tile.x) * size, double(tile.y) * size, size};
-  std::vector<float> cap(size_t(size) * size, std::numeric_limits<float>::infinity());
+  std::vector<float> cap = std::move(storage);
+  cap.assign(size_t(size) * size, std::numeric_limits<float>::infinity());
   const Scene& world = scene.scene();
   const auto triangles = scene.triangles_of(tile);
   SecondLayerCapCounts local;

@@ -42,8 +42,9 @@ struct SecondLayerCapCounts {
 // apply_exit_caps' result anywhere in their box are skipped: float(shallowest) - margin >= every
 // texel's upper there (texels without an exit have nothing to cap). The caps are then exact only
 // where they matter; apply_exit_caps gives the same intervals as with every region.
+// `storage`: a buffer to reuse (as receiver_surface_caps).
 std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
                                      const TileIntervals& intervals, float exit_margin,
-                                     SecondLayerCapCounts* counts = nullptr);
+                                     SecondLayerCapCounts* counts = nullptr, std::vector<float> storage = {});
 
 }  // namespace shadowtiles

@@ -33,9 +33,10 @@ double thread_cpu_seconds() {
 // One tile: render, encode every method, and gather the puts of its one transaction.
 // Returns the tile's root interval (a miss when nothing covers it) through `root`.
 Status process_tile(const TilePipelineInput& input, TileCoord tile, TilePipelineTotals& mine,
-                    std::atomic<uint64_t>& rays_done, std::vector<store::Store::Put>& puts, DepthInterval& root) {
+                    std::atomic<uint64_t>& rays_done, std::vector<store::Store::Put>& puts, DepthInterval& root,
+                    RenderBuffers& buffers) {
   DualDepthStats depth;
-  auto intervals = input.renderer->render(tile, &depth);
+  auto intervals = input.renderer->render(tile, &depth, &buffers);
   if (!intervals) return intervals.error();
   mine.depth.add(depth);
   rays_done += depth.rays;
@@ -77,6 +78,7 @@ Status process_tile(const TilePipelineInput& input, TileCoord tile, TilePipeline
   const auto record = store::encode_progress({!empty, root.lower, root.upper});
   puts.push_back({store::Database::progress, {key.begin(), key.end()}, {record.begin(), record.end()}});
   mine.encode_seconds += seconds_since(encode_start);
+  buffers.intervals = std::move(*intervals);  // the next tile renders into the same pages
   return {};
 }
 
@@ -113,6 +115,7 @@ Result<TilePipelineResult> run_tile_pipeline(const TilePipelineInput& input, con
   };
   auto worker = [&] {
     TilePipelineTotals mine;
+    RenderBuffers buffers;  // this worker's tile buffers, reused tile after tile
     while (!failed) {
       const size_t i = next++;
       if (i >= todo.size()) break;
@@ -122,7 +125,7 @@ Result<TilePipelineResult> run_tile_pipeline(const TilePipelineInput& input, con
       const uint64_t hits_before = mine.depth.hits, bytes_before = mine.blob_bytes;
       std::vector<store::Store::Put> puts;
       DepthInterval root;
-      if (Status s = process_tile(input, tile, mine, rays_done, puts, root); !s) {
+      if (Status s = process_tile(input, tile, mine, rays_done, puts, root, buffers); !s) {
         fail(s.error());
         break;
       }
