@@ -10,16 +10,10 @@
 #include <spdlog/spdlog.h>
 
 #include "builder/mesh_classifier.hpp"
+#include "codec/vec3_math.hpp"
 
 namespace shadowtiles {
 namespace {
-
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
 
 // Signed solid angle of triangle (a, b, c) seen from p, over 4 pi (Van Oosterom and Strackee 1983):
 // positive when p is on the side the counter-clockwise normal points away from.

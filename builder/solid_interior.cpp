@@ -4,15 +4,10 @@
 #include <limits>
 
 #include "builder/embree_world_scene.hpp"
+#include "codec/vec3_math.hpp"
 
 namespace shadowtiles {
 namespace {
-
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 // The solid's surfaces as one Embree geometry, with +1 (faces the light: entering from the sun's
 // side) or -1 per primitive.
@@ -57,12 +52,12 @@ SolidSurfaces solid_surfaces(const EmbreeDevice& device, const Scene& scene, con
 std::vector<uint8_t> receivers_inside_solids(const EmbreeDevice& device, const Scene& scene,
                                              const Vec3& light_direction, std::span<const Receiver> receivers) {
   std::vector<uint8_t> inside(receivers.size(), 0);
-  const double length = std::sqrt(dot(light_direction, light_direction));
+  const double length = norm(light_direction);
   if (receivers.empty() || !(length > 0)) return inside;
   const Vec3 light{light_direction[0] / length, light_direction[1] / length, light_direction[2] / length};
   const Vec3 to_sun{-light[0], -light[1], -light[2]};
   const Vec3 centre = scene_centre(scene);
-  const double diagonal = std::sqrt(dot(sub(scene.bounds.max, scene.bounds.min), sub(scene.bounds.max, scene.bounds.min)));
+  const double diagonal = norm(sub(scene.bounds.max, scene.bounds.min));
   const double off_surface = 1e-5 * diagonal;  // GroundTruth's epsilon: off the receiver's own face
   const float step = float(1e-7 * diagonal);    // past a hit before looking for the next one
   SolidSurfaces solid = solid_surfaces(device, scene, light, centre);

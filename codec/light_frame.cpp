@@ -5,14 +5,11 @@
 #include <limits>
 #include <string>
 
+#include "codec/vec3_math.hpp"
+
 namespace shadowtiles {
 namespace {
 
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double length(const Vec3& a) { return std::sqrt(dot(a, a)); }
 Vec3 scaled(const Vec3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
 bool finite(const Vec3& a) { return std::isfinite(a[0]) && std::isfinite(a[1]) && std::isfinite(a[2]); }
 bool is_power_of_two(uint32_t x) { return x != 0 && (x & (x - 1)) == 0; }
@@ -29,14 +26,14 @@ struct Basis {
 };
 
 Result<Basis> basis_for(const Vec3& direction) {
-  double len = length(direction);
+  double len = norm(direction);
   if (!finite(direction) || !(len > 1e-12))
     return make_error(ErrorCode::invalid_input, "light direction must be finite and non-zero");
   Vec3 z = scaled(direction, 1.0 / len);
   // Helper axis least aligned with z keeps the basis well conditioned for any direction.
   Vec3 helper = std::fabs(z[2]) < 0.9 ? Vec3{0, 0, 1} : Vec3{0, 1, 0};
   Vec3 x = cross(helper, z);
-  x = scaled(x, 1.0 / length(x));
+  x = scaled(x, 1.0 / norm(x));
   Vec3 y = cross(z, x);  // right-handed: x cross y = z
   return Basis{x, y, z};
 }
