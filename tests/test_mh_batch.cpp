@@ -7,12 +7,10 @@
 #include <random>
 #include <vector>
 
-#include "builder/mh_builder.hpp"
-#include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
-#include "builder/mmh_merger.hpp"
 #include "codec/mh_decoder.hpp"
 #include "codec/morton.hpp"
+#include "tests/mh_tile_views.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -36,32 +34,24 @@ TEST(MhBatch, SortedAndSparseBatchesEqualPerQueryLookups) {
   std::mt19937 rng(11);
   for (MhSyntheticKind kind : {MhSyntheticKind::random_intervals, MhSyntheticKind::noisy_plane,
                                MhSyntheticKind::steps, MhSyntheticKind::boxes_and_misses}) {
-    const TileIntervals tile = make_synthetic_tile(kind, kSize, 5);
-    auto tree = build_mh(tile);
-    ASSERT_TRUE(tree.ok());
-    auto merged = merge_mmh(*tree);
-    ASSERT_TRUE(merged.ok());
-    for (const MhHierarchy* h : {&*tree, &*merged}) {
-      auto bytes = encode_mh(*h);
-      ASSERT_TRUE(bytes.ok());
-      for (unsigned skip : {0u, 3u, 6u}) {
-        MhParseOptions options;
-        options.skip_level = skip;
-        auto view = MhTileView::parse(*bytes, options);
-        ASSERT_TRUE(view.ok());
-        // 300 points over 1M texels: sparse (interleaved walks); 20,000: dense (shared descents);
-        // 2,000 unsorted; 9 (below the sparse test's minimum); and coarser levels.
-        for (size_t count : {300u, 20000u, 2000u, 9u}) {
-          const bool sorted = count != 2000;
-          const std::vector<TexelQuery> q = queries(*view, kSize, count, sorted, rng);
-          for (unsigned max_level : {kMhAllLevels, 9u, 7u}) {
-            std::vector<uint8_t> lit(q.size(), 2);
-            view->lit_sorted(q, max_level, lit.data());
-            for (size_t i = 0; i < q.size(); ++i)
-              ASSERT_EQ(lit[i], q[i].threshold <= view->lookup(q[i].u, q[i].v, max_level) ? 1 : 0)
-                  << synthetic_kind_name(kind) << " skip " << skip << " count " << count << " level " << max_level
-                  << " query " << i;
-          }
+    MhTileViews views;
+    make_mh_tile_views(make_synthetic_tile(kind, kSize, 5), {0u, 3u, 6u}, views);
+    ASSERT_FALSE(HasFatalFailure());
+    for (const MhTileViews::Entry& entry : views.views) {
+      const MhTileView* view = &entry.view;
+      const unsigned skip = entry.skip;
+      // 300 points over 1M texels: sparse (interleaved walks); 20,000: dense (shared descents);
+      // 2,000 unsorted; 9 (below the sparse test's minimum); and coarser levels.
+      for (size_t count : {300u, 20000u, 2000u, 9u}) {
+        const bool sorted = count != 2000;
+        const std::vector<TexelQuery> q = queries(*view, kSize, count, sorted, rng);
+        for (unsigned max_level : {kMhAllLevels, 9u, 7u}) {
+          std::vector<uint8_t> lit(q.size(), 2);
+          view->lit_sorted(q, max_level, lit.data());
+          for (size_t i = 0; i < q.size(); ++i)
+            ASSERT_EQ(lit[i], q[i].threshold <= view->lookup(q[i].u, q[i].v, max_level) ? 1 : 0)
+                << synthetic_kind_name(kind) << (entry.merged ? " MMH" : " MH") << " skip " << skip << " count " << count << " level " << max_level
+                << " query " << i;
         }
       }
     }

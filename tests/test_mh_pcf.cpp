@@ -7,6 +7,7 @@
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
 #include "builder/mmh_merger.hpp"
+#include "tests/mh_tile_views.hpp"
 #include "codec/mh_decoder.hpp"
 
 namespace shadowtiles {
@@ -25,32 +26,23 @@ TEST(MhPcf, FastPathEqualsNaive) {
   for (MhSyntheticKind kind : {MhSyntheticKind::random_intervals, MhSyntheticKind::noisy_plane,
                                MhSyntheticKind::steps, MhSyntheticKind::boxes_and_misses, MhSyntheticKind::all_miss}) {
     for (uint32_t size : {1u, 4u, 64u, 256u}) {
-      const TileIntervals tile = make_synthetic_tile(kind, size, size * 3 + 1);
-      auto tree = build_mh(tile);
-      ASSERT_TRUE(tree.ok());
-      auto merged = merge_mmh(*tree);
-      ASSERT_TRUE(merged.ok());
-      for (const MhHierarchy* h : {&*tree, &*merged}) {
-        auto bytes = encode_mh(*h);
-        ASSERT_TRUE(bytes.ok());
-        for (unsigned skip : {0u, 2u, 6u}) {
-          MhParseOptions options;
-          options.skip_level = skip;
-          auto view = MhTileView::parse(*bytes, options);
-          ASSERT_TRUE(view.ok());
-          for (int trial = 0; trial < 300; ++trial) {
-            const uint32_t k = std::min<uint32_t>(size, std::vector<uint32_t>{1, 2, 3, 5, 7, 9, 16}[trial % 7]);
-            const uint32_t kh = trial % 5 == 0 ? std::max(1u, k / 2) : k;  // some rectangles (split kernels)
-            const uint32_t u0 = rng() % (size - k + 1), v0 = rng() % (size - kh + 1);
-            // Depth near a real value so both outcomes occur.
-            const float depth = view->lookup(u0 + k / 2, v0 + kh / 2) + (float(rng() % 200) - 100.0f) * 1e-4f;
-            const float bias = trial % 3 == 0 ? 0.0f : 1e-3f;
-            ASSERT_EQ(view->pcf_lit_count(u0, v0, k, kh, depth, bias), naive_count(*view, u0, v0, k, kh, depth, bias))
-                << synthetic_kind_name(kind) << " size " << size << " at " << u0 << "," << v0 << " k " << k;
-            if (kh == k) {
-              ASSERT_EQ(view->pcf_lit_fraction(u0, v0, k, depth, bias),
-                        float(naive_count(*view, u0, v0, k, k, depth, bias)) / float(k * k));
-            }
+      MhTileViews views;
+      make_mh_tile_views(make_synthetic_tile(kind, size, size * 3 + 1), {0u, 2u, 6u}, views);
+      ASSERT_FALSE(HasFatalFailure());
+      for (const MhTileViews::Entry& entry : views.views) {
+        const MhTileView* view = &entry.view;
+        for (int trial = 0; trial < 300; ++trial) {
+          const uint32_t k = std::min<uint32_t>(size, std::vector<uint32_t>{1, 2, 3, 5, 7, 9, 16}[trial % 7]);
+          const uint32_t kh = trial % 5 == 0 ? std::max(1u, k / 2) : k;  // some rectangles (split kernels)
+          const uint32_t u0 = rng() % (size - k + 1), v0 = rng() % (size - kh + 1);
+          // Depth near a real value so both outcomes occur.
+          const float depth = view->lookup(u0 + k / 2, v0 + kh / 2) + (float(rng() % 200) - 100.0f) * 1e-4f;
+          const float bias = trial % 3 == 0 ? 0.0f : 1e-3f;
+          ASSERT_EQ(view->pcf_lit_count(u0, v0, k, kh, depth, bias), naive_count(*view, u0, v0, k, kh, depth, bias))
+              << synthetic_kind_name(kind) << " size " << size << " at " << u0 << "," << v0 << " k " << k;
+          if (kh == k) {
+            ASSERT_EQ(view->pcf_lit_fraction(u0, v0, k, depth, bias),
+                      float(naive_count(*view, u0, v0, k, k, depth, bias)) / float(k * k));
           }
         }
       }
