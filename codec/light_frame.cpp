@@ -131,6 +131,7 @@ Result<LightFrame> LightFrame::from_parameters(const Vec3& light_direction, cons
   frame.extent_ = extent;
   frame.depth_range_ = depth_range;
   frame.resolution_ = resolution;
+  frame.texels_per_unit_ = resolution / extent;
   return frame;
 }
 
@@ -149,12 +150,6 @@ Result<uint32_t> LightFrame::resolution_for_texel_size(const Vec3& light_directi
     resolution *= 2;
   }
   return resolution;
-}
-
-LightSpacePoint LightFrame::to_light(const Vec3& world) const {
-  Vec3 rel{world[0] - origin_[0], world[1] - origin_[1], world[2] - origin_[2]};
-  double texels_per_unit = resolution_ / extent_;
-  return {dot(rel, axis_x_) * texels_per_unit, dot(rel, axis_y_) * texels_per_unit, dot(rel, axis_z_) / depth_range_};
 }
 
 Vec3 LightFrame::to_world(const LightSpacePoint& light) const {

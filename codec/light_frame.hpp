@@ -60,7 +60,13 @@ class LightFrame {
   static Result<uint32_t> resolution_for_texel_size(const Vec3& light_direction, const WorldBounds& bounds,
                                                     double texel_size);
 
-  LightSpacePoint to_light(const Vec3& world) const;
+  // Inline: the batch query's transform pass calls it per point (1M-point batches).
+  LightSpacePoint to_light(const Vec3& world) const {
+    const double x = world[0] - origin_[0], y = world[1] - origin_[1], z = world[2] - origin_[2];
+    return {(x * axis_x_[0] + y * axis_x_[1] + z * axis_x_[2]) * texels_per_unit_,
+            (x * axis_y_[0] + y * axis_y_[1] + z * axis_y_[2]) * texels_per_unit_,
+            (x * axis_z_[0] + y * axis_z_[1] + z * axis_z_[2]) / depth_range_};
+  }
   Vec3 to_world(const LightSpacePoint& light) const;
 
   const Vec3& direction() const { return axis_z_; }  // unit, light travel direction
@@ -80,6 +86,7 @@ class LightFrame {
   double extent_ = 0;
   double depth_range_ = 0;
   uint32_t resolution_ = 0;
+  double texels_per_unit_ = 0;  // resolution_ / extent_, the value to_light() computed per call
 };
 
 }  // namespace shadowtiles
