@@ -26,10 +26,7 @@ DURATION=${DURATION:-60}
 CONNECTIONS=${CONNECTIONS:-32}
 CLI="$BUILD_DIR/cli/shadowtiles"
 
-for tool in wrk curl python3; do
-  command -v "$tool" > /dev/null || { echo "needs $tool (apt-get install -y wrk curl python3)" >&2; exit 2; }
-done
-[ -x "$CLI" ] || { echo "no $CLI: build first (bash scripts/build.sh)" >&2; exit 2; }
+require_load_tools "$CLI"
 
 WORK=$(mktemp -d)
 SERVER_PID=""

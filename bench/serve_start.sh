@@ -1,5 +1,15 @@
-# Sourced by the load benchmarks (bench/server_load.sh, bench/mixed_load.sh): starts `shadowtiles
-# serve` on a free loopback port and waits until it answers /healthz.
+# Sourced by the load benchmarks (bench/server_load.sh, bench/mixed_load.sh).
+#   require_load_tools CLI
+# Exits 2 with what to install or build when wrk, curl, python3 or the CLI is missing.
+require_load_tools() {
+  local tool
+  for tool in wrk curl python3; do
+    command -v "$tool" > /dev/null || { echo "needs $tool (apt-get install -y wrk curl python3)" >&2; exit 2; }
+  done
+  [ -x "$1" ] || { echo "no $1: build first (bash scripts/build.sh)" >&2; exit 2; }
+}
+
+# Starts `shadowtiles serve` on a free loopback port and waits until it answers /healthz.
 #   start_serve CLI STORE LOG [serve options...]
 # Sets SERVER_PID, PORT and BASE (http://127.0.0.1:PORT). On failure prints the server log (if it
 # exited) or a message and returns 1; stopping the server stays with the caller's cleanup.

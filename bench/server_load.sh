@@ -33,10 +33,7 @@ BATCH_METHODS=${BATCH_METHODS:-raw mh dagmh}
 UP=${UP:-y}
 CLI="$BUILD_DIR/cli/shadowtiles"
 
-for tool in wrk curl python3; do
-  command -v "$tool" > /dev/null || { echo "needs $tool (apt-get install -y wrk curl python3)" >&2; exit 2; }
-done
-[ -x "$CLI" ] || { echo "no $CLI: build first (bash scripts/build.sh)" >&2; exit 2; }
+require_load_tools "$CLI"
 
 WORK=$(mktemp -d)
 SERVER_PID=""

@@ -66,6 +66,10 @@ std::string Metrics::render(const std::optional<CacheStats>& cache) const {
     std::snprintf(line, sizeof line, format, args...);
     out += line;
   };
+  // One unlabelled sample with its HELP and TYPE lines.
+  auto single = [&](const char* name, const char* type, const char* help, uint64_t value) {
+    emit("# HELP %s %s\n# TYPE %s %s\n%s %llu\n", name, help, name, type, name, (unsigned long long)value);
+  };
   std::lock_guard lock(mutex_);
   out += "# HELP shadowtiles_http_requests_total HTTP requests answered, by route, method and status.\n"
          "# TYPE shadowtiles_http_requests_total counter\n";
@@ -91,36 +95,21 @@ std::string Metrics::render(const std::optional<CacheStats>& cache) const {
     emit("shadowtiles_http_request_duration_seconds_sum{route=\"%s\"} %.9g\n", route, h.sum);
     emit("shadowtiles_http_request_duration_seconds_count{route=\"%s\"} %llu\n", route, (unsigned long long)h.count);
   }
-  emit("# HELP shadowtiles_points_answered_total Points answered by /v1/shadow (single and batch).\n"
-       "# TYPE shadowtiles_points_answered_total counter\n"
-       "shadowtiles_points_answered_total %llu\n",
-       (unsigned long long)points_.load(std::memory_order_relaxed));
-  emit("# HELP shadowtiles_corrupt_blobs_total Stored blobs that failed their checks and were not served.\n"
-       "# TYPE shadowtiles_corrupt_blobs_total counter\n"
-       "shadowtiles_corrupt_blobs_total %llu\n",
-       (unsigned long long)corrupt_blobs_.load(std::memory_order_relaxed));
+  single("shadowtiles_points_answered_total", "counter", "Points answered by /v1/shadow (single and batch).",
+         points_.load(std::memory_order_relaxed));
+  single("shadowtiles_corrupt_blobs_total", "counter", "Stored blobs that failed their checks and were not served.",
+         corrupt_blobs_.load(std::memory_order_relaxed));
   out += "# HELP shadowtiles_rejections_total Connections and requests refused to protect the server, by reason.\n"
          "# TYPE shadowtiles_rejections_total counter\n";
   for (size_t r = 0; r < kRejectionCount; ++r)
     emit("shadowtiles_rejections_total{reason=\"%s\"} %llu\n", rejection_name(Rejection(r)),
          (unsigned long long)rejections_[r].load(std::memory_order_relaxed));
   if (cache) {
-    emit("# HELP shadowtiles_tile_cache_hits_total Decoded tile cache hits.\n"
-         "# TYPE shadowtiles_tile_cache_hits_total counter\n"
-         "shadowtiles_tile_cache_hits_total %llu\n",
-         (unsigned long long)cache->hits);
-    emit("# HELP shadowtiles_tile_cache_misses_total Decoded tile cache misses (tile read and decoded).\n"
-         "# TYPE shadowtiles_tile_cache_misses_total counter\n"
-         "shadowtiles_tile_cache_misses_total %llu\n",
-         (unsigned long long)cache->misses);
-    emit("# HELP shadowtiles_tile_cache_bytes Bytes held by decoded tiles in the cache.\n"
-         "# TYPE shadowtiles_tile_cache_bytes gauge\n"
-         "shadowtiles_tile_cache_bytes %llu\n",
-         (unsigned long long)cache->bytes);
-    emit("# HELP shadowtiles_tile_cache_tiles Tiles in the cache (empty tiles included).\n"
-         "# TYPE shadowtiles_tile_cache_tiles gauge\n"
-         "shadowtiles_tile_cache_tiles %llu\n",
-         (unsigned long long)cache->tiles);
+    single("shadowtiles_tile_cache_hits_total", "counter", "Decoded tile cache hits.", cache->hits);
+    single("shadowtiles_tile_cache_misses_total", "counter", "Decoded tile cache misses (tile read and decoded).",
+           cache->misses);
+    single("shadowtiles_tile_cache_bytes", "gauge", "Bytes held by decoded tiles in the cache.", cache->bytes);
+    single("shadowtiles_tile_cache_tiles", "gauge", "Tiles in the cache (empty tiles included).", cache->tiles);
   }
   return out;
 }

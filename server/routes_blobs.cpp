@@ -28,6 +28,18 @@ std::string cache_control(const ServiceState& state, bool versioned) {
                    : "public, no-cache";
 }
 
+// Sets the validators of an answer (strong `etag`, Cache-Control by URL kind); true when the
+// client's If-None-Match already names it, with 304 set and nothing more to send.
+bool not_modified(const ServiceState& state, const httplib::Request& req, httplib::Response& res,
+                  const std::string& etag, bool versioned) {
+  res.set_header("ETag", etag);
+  res.set_header("Cache-Control", cache_control(state, versioned));
+  if (!req.has_header("If-None-Match") || !if_none_match_matches(req.get_header_value("If-None-Match"), etag))
+    return false;
+  res.status = 304;
+  return true;
+}
+
 // A /v1/builds/{id}/... URL names the served build, or it is 404 (an older build after a swap).
 bool check_build_id(const ShadowMap& map, const std::string& id, httplib::Response& res) {
   if (id == map.meta().config_hash) return true;
@@ -91,12 +103,7 @@ void serve_blob(ServiceState& state, std::shared_ptr<const ShadowMap> held, bool
   }
   // fmt rather than string operator+: GCC 12 reports a false -Wrestrict on the latter.
   const std::string etag = fmt::format("\"{}\"", store::checksum_hex(header->checksum));
-  res.set_header("ETag", etag);
-  res.set_header("Cache-Control", cache_control(state, versioned));
-  if (req.has_header("If-None-Match") && if_none_match_matches(req.get_header_value("If-None-Match"), etag)) {
-    res.status = 304;
-    return;
-  }
+  if (not_modified(state, req, res, etag, versioned)) return;
   res.status = 200;
   const std::span<const uint8_t> bytes = **view;
   if (pinned_sends.load(std::memory_order_relaxed) >= kMaxPinnedSends) {
@@ -189,12 +196,7 @@ void get_build(ServiceState& state, const httplib::Request& req, httplib::Respon
   }
   set_build_header(res, held->meta().config_hash);
   const std::string etag = "\"" + held->meta().config_hash + "\"";
-  res.set_header("ETag", etag);
-  res.set_header("Cache-Control", cache_control(state, false));
-  if (req.has_header("If-None-Match") && if_none_match_matches(req.get_header_value("If-None-Match"), etag)) {
-    res.status = 304;
-    return;
-  }
+  if (not_modified(state, req, res, etag, false)) return;
   res.status = 200;
   res.set_content(*text, "application/json");
 }
