@@ -94,6 +94,20 @@ TEST(MeshFilePrechecks, AsciiListCountBeyondItsLineIsRefused) {
   EXPECT_EQ(load_ok(dir.path() / "ok.ply").triangle_count(), 1u);
 }
 
+TEST(MeshFilePrechecks, AsciiLineOfTooFewWordsIsRefused) {
+  // fuzz_scene_loader regression (ply-ascii-vertex-line-of-two-words): vertex line "0.000 30.000"
+  // of an 81-vertex PLY; assimp 5.2 read on past the line and asked for 16 GB.
+  TempDir dir;
+  write_file(dir.path() / "short_line.ply", kAsciiHeader + "0 0 0\n1 0\n0 1 0\n3 0 1 2\n");
+  expect_refused(dir.path() / "short_line.ply", "element 'vertex' #1 (body line 2): 2 words for 3 properties");
+  // A face line with its count and no room for the list's first index is caught the same way.
+  write_file(dir.path() / "bare_count.ply", kAsciiHeader + kAsciiVertices + "3\n");
+  expect_refused(dir.path() / "bare_count.ply", "a list of 3 items on a line that holds 0 more words");
+  // Words beyond the properties are left to assimp, which ignores them.
+  write_file(dir.path() / "long_line.ply", kAsciiHeader + "0 0 0 7\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(load_ok(dir.path() / "long_line.ply").triangle_count(), 1u);
+}
+
 TEST(MeshFilePrechecks, TruncatedBinaryBodyIsRefused) {
   TempDir dir;
   // Cut inside the face list: the header's minimum-size rule still passes (the count byte is there).
