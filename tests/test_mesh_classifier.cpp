@@ -31,6 +31,22 @@ Triangles cube_triangles() {
   }
   return t;
 }
+// The same cube as importers deliver it: each triangle with vertices of its own (36, positions
+// repeated), as when every face carries its own normal or uv.
+struct SplitMesh {
+  std::vector<Vec3> vertices;
+  Triangles triangles;
+};
+SplitMesh split_cube() {
+  const std::vector<Vec3> shared = cube_vertices();
+  SplitMesh mesh;
+  for (const auto& tri : cube_triangles()) {
+    const uint32_t base = uint32_t(mesh.vertices.size());
+    for (uint32_t k : tri) mesh.vertices.push_back(shared[k]);
+    mesh.triangles.push_back({base, base + 1, base + 2});
+  }
+  return mesh;
+}
 
 TEST(MeshClassifier, CubeIsClosedWithPositiveVolume) {
   const auto c = classify_mesh(cube_vertices(), cube_triangles());
@@ -93,15 +109,7 @@ TEST(MeshClassifier, TwoCubesSharingAnEdgeAreNonManifold) {
 }
 
 TEST(MeshClassifier, SplitVerticesAreWelded) {
-  // The way importers deliver a cube: 4 vertices per face (own normal/uv), 24 in all.
-  const std::vector<Vec3> shared = cube_vertices();
-  std::vector<Vec3> v;
-  Triangles t;
-  for (const auto& tri : cube_triangles()) {
-    const uint32_t base = uint32_t(v.size());
-    for (uint32_t k : tri) v.push_back(shared[k]);
-    t.push_back({base, base + 1, base + 2});
-  }
+  auto [v, t] = split_cube();
   v[0][0] = -0.0;  // -0.0 and 0.0 are the same position
   ASSERT_EQ(v.size(), 36u);
   uint32_t unique = 0;
@@ -222,14 +230,7 @@ TEST(SceneAddMesh, HeightfieldIsNotClassified) {
 }
 
 TEST(SceneAddMesh, SplitVerticesAreMergedInTheScene) {
-  const std::vector<Vec3> shared = cube_vertices();
-  std::vector<Vec3> v;
-  Triangles t;
-  for (const auto& tri : cube_triangles()) {
-    const uint32_t base = uint32_t(v.size());
-    for (uint32_t k : tri) v.push_back(shared[k]);
-    t.push_back({base, base + 1, base + 2});
-  }
+  const auto [v, t] = split_cube();
   Scene scene;
   EXPECT_EQ(scene.add_mesh("split", v, t), 0u);
   EXPECT_EQ(scene.vertices.size(), 8u);
