@@ -276,8 +276,8 @@ class PlyChecker {
   // One instance per non-blank line, as assimp 5.2 reads ascii bodies (it skips blank lines). A body
   // with fewer lines than the header declares is refused: assimp 5.2 reads on past the end of a short
   // ascii body (found by fuzz_scene_loader: 21 GB from a 2.4 KB file). A line must hold a word for
-  // each scalar property and list counts must fit in its remaining words; other oddities are left to
-  // assimp's own errors.
+  // each scalar property, list counts must be plain integers that fit in its remaining words; other
+  // oddities are left to assimp's own errors.
   Status walk_ascii() {
     std::ifstream in(file_, std::ios::binary);
     if (!in) return make_error(ErrorCode::io_error, fmt::format("{}: cannot open", file_.string()));
@@ -322,7 +322,11 @@ class PlyChecker {
             continue;
           }
           uint64_t items = 0;
-          if (!parse_count(words[word], &items)) break;  // not a plain count: assimp reports it
+          // assimp 5.2 reads a count's leading digits and ignores the rest, so "123333333330.000"
+          // became a list of 10^11 items (found by fuzz_scene_loader: 2.2 GB from a 4 KB file).
+          if (!parse_count(words[word], &items))
+            return fail(fmt::format("element '{}' #{} (body line {}): list count '{}' is not a plain integer",
+                                    element.name, instance, line_number, words[word]));
           ++word;
           if (items > words.size() - word)
             return fail(fmt::format("element '{}' #{} (body line {}): a list of {} items on a line that holds {} more "

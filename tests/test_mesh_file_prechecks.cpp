@@ -94,7 +94,7 @@ TEST(MeshFilePrechecks, AsciiListCountBeyondItsLineIsRefused) {
   EXPECT_EQ(load_ok(dir.path() / "ok.ply").triangle_count(), 1u);
 }
 
-TEST(MeshFilePrechecks, AsciiLineOfTooFewWordsIsRefused) {
+TEST(MeshFilePrechecks, AsciiShortLinesAndFractionalCountsAreRefused) {
   // fuzz_scene_loader regression (ply-ascii-vertex-line-of-two-words): vertex line "0.000 30.000"
   // of an 81-vertex PLY; assimp 5.2 read on past the line and asked for 16 GB.
   TempDir dir;
@@ -103,6 +103,12 @@ TEST(MeshFilePrechecks, AsciiLineOfTooFewWordsIsRefused) {
   // A face line with its count and no room for the list's first index is caught the same way.
   write_file(dir.path() / "bare_count.ply", kAsciiHeader + kAsciiVertices + "3\n");
   expect_refused(dir.path() / "bare_count.ply", "a list of 3 items on a line that holds 0 more words");
+  // fuzz_scene_loader regression (ply-ascii-list-count-with-a-fraction): assimp 5.2 reads the
+  // leading digits of "123333333330.000" as the count and took 2.2 GB.
+  write_file(dir.path() / "fraction.ply", kAsciiHeader + kAsciiVertices + "123333333330.000 0 1 2\n");
+  expect_refused(dir.path() / "fraction.ply", "list count '123333333330.000' is not a plain integer");
+  write_file(dir.path() / "three_point_oh.ply", kAsciiHeader + kAsciiVertices + "3.0 0 1 2\n");
+  expect_refused(dir.path() / "three_point_oh.ply", "list count '3.0' is not a plain integer");
   // Words beyond the properties are left to assimp, which ignores them.
   write_file(dir.path() / "long_line.ply", kAsciiHeader + "0 0 0 7\n1 0 0\n0 1 0\n3 0 1 2\n");
   EXPECT_EQ(load_ok(dir.path() / "long_line.ply").triangle_count(), 1u);
