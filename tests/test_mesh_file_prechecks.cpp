@@ -167,7 +167,7 @@ TEST(MeshFilePrechecks, OffCountsMustBeIntegers) {
   // after a 13-digit vertex count; assimp 5.2 took 60 (from "60.000") as the face count and wrapped the
   // vertex count to 32 bits: a 10.5 GB allocation from an 856-byte file.
   TempDir dir;
-  write_file(dir.path() / "wrapped.off", "\n6666666666653\n60.000 120.000 242.186\n90.000 120.000 245.388\n");
+  write_file(dir.path() / "wrapped.off", "OFF\n6666666666653\n60.000 120.000 242.186\n90.000 120.000 245.388\n");
   expect_refused(dir.path() / "wrapped.off",
                  "the header must give the vertex and face counts as integers (found '60.000')");
   write_file(dir.path() / "missing.off", "OFF\n3\n");
@@ -180,6 +180,22 @@ TEST(MeshFilePrechecks, OffCountsMustBeIntegers) {
   EXPECT_EQ(load_ok(dir.path() / "coff.off").triangle_count(), 1u);
   write_file(dir.path() / "ok.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
   EXPECT_EQ(load_ok(dir.path() / "ok.off").triangle_count(), 1u);
+}
+
+TEST(MeshFilePrechecks, OffWithoutItsKeywordLineIsRefused) {
+  // fuzz_scene_loader regression (off-body-without-its-keyword-line): counts and body lines that our
+  // check accepted, but without the "OFF" line assimp 5.2 read them otherwise, dropped faces and read
+  // out of bounds (SEGV).
+  TempDir dir;
+  const std::string body = "3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  write_file(dir.path() / "bare.off", body);
+  expect_refused(dir.path() / "bare.off", "must start with its keyword line");
+  write_file(dir.path() / "commented.off", "# a comment first\n\n" + body);
+  expect_refused(dir.path() / "commented.off", "found '3'");
+  write_file(dir.path() / "keyword.off", "# a comment first\nOFF\n" + body);
+  EXPECT_EQ(load_ok(dir.path() / "keyword.off").triangle_count(), 1u);
+  write_file(dir.path() / "same_line.off", "OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(load_ok(dir.path() / "same_line.off").triangle_count(), 1u);
 }
 
 TEST(MeshFilePrechecks, NulByteInAnAsciiBodyIsRefused) {
