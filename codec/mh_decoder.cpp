@@ -302,20 +302,27 @@ uint32_t MhTileView::count_from_ancestor(WalkState s, unsigned lca, uint32_t u0,
   path[lca] = s;
   unsigned end = lca;
   uint32_t pu = u0, pv = v0, lit = 0;
-  for (uint32_t v = v0; v <= v1; ++v) {
-    for (uint32_t u = u0; u <= u1; ++u) {
-      // Resume from the deepest node this sample shares with the previous one.
-      const unsigned shared = L - unsigned(std::bit_width((u ^ pu) | (v ^ pv)));
-      unsigned from = std::min(shared, end);
-      WalkState c = path[from];
-      while (c.mask != 0 && from < L) {
-        if (!step<W>(stream_, child_index(u, v, L - 1 - from), c)) break;
-        path[++from] = c;
+  // Samples go by the 2x2 squares of their parents (raster order of the squares): the samples of one
+  // parent follow each other and share its walk. A 3x3 kernel in a full-depth tree steps ~18 times
+  // this way, ~22 in raster order.
+  for (uint32_t sv = v0 & ~1u; sv <= v1; sv += 2) {
+    for (uint32_t su = u0 & ~1u; su <= u1; su += 2) {
+      for (uint32_t v = std::max(sv, v0); v <= std::min(sv + 1, v1); ++v) {
+        for (uint32_t u = std::max(su, u0); u <= std::min(su + 1, u1); ++u) {
+          // Resume from the deepest node this sample shares with the previous one.
+          const unsigned shared = L - unsigned(std::bit_width((u ^ pu) | (v ^ pv)));
+          unsigned from = std::min(shared, end);
+          WalkState c = path[from];
+          while (c.mask != 0 && from < L) {
+            if (!step<W>(stream_, child_index(u, v, L - 1 - from), c)) break;
+            path[++from] = c;
+          }
+          end = from;
+          lit += depth <= c.value + bias;
+          pu = u;
+          pv = v;
+        }
       }
-      end = from;
-      lit += depth <= c.value + bias;
-      pu = u;
-      pv = v;
     }
   }
   return lit;
