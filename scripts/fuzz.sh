@@ -5,7 +5,7 @@
 # Usage: scripts/fuzz.sh [--ci | --long] [--runs N] [--time S] [--jobs J] [--seed S] [--work DIR] [--no-build] [TARGET...]
 #   --ci     (default) 100,000 executions per target, seeded (-seed=1: CI sees the same mutations on
 #            every run, so a CI failure reproduces and a green CI is not luck; --long explores), each
-#            target capped at --time 240 s and all of them at --budget 300 s (a target starting late
+#            target capped at --time 290 s and all of them at --budget 300 s (a target starting late
 #            gets what is left of it: regressions + fuzzing end within ~5 min on 2 cores; the slowest,
 #            fuzz_scene_loader, needs ~180 CPU-s for its count); CI runs this
 #   --long   1,000,000 executions per target, each capped at 3 h (ctest label `long`: fuzz_long);
@@ -27,7 +27,7 @@ cd "$(dirname "$0")/.."
 root=$(pwd)
 mode=ci
 runs=
-max_time=240
+max_time=290
 budget=300
 jobs=2
 seed=
@@ -36,7 +36,7 @@ build=yes
 targets=()
 while [ $# -gt 0 ]; do
   case "$1" in
-    --ci) mode=ci; max_time=240; budget=300 ;;
+    --ci) mode=ci; max_time=290; budget=300 ;;
     --seed) seed="$2"; shift ;;
     --long) mode=long; max_time=10800; budget=0 ;;
     --runs) runs="$2"; shift ;;
