@@ -70,9 +70,10 @@ class MhTileView {
 
   // Fraction of the k x k texels [u0, u0+k) x [v0, v0+k) that are lit for a receiver at `depth`
   // (lit: depth <= value + bias), at full resolution. Descends once to the kernel's lowest common
-  // ancestor, then per sample from the deepest node shared with the previous sample. Equal to the
-  // per-sample lookup() result. Preconditions: k >= 1, u0 + k <= size(), v0 + k <= size() (kernels
-  // crossing tiles are split by the caller); violations are asserted and clamped in release.
+  // ancestor, then per sample (by their parents' 2x2 squares) from the deepest node shared with the
+  // previous sample. Equal to the per-sample lookup() result. Preconditions: k >= 1,
+  // u0 + k <= size(), v0 + k <= size() (kernels crossing tiles are split by the caller); violations
+  // are asserted and clamped in release.
   float pcf_lit_fraction(uint32_t u0, uint32_t v0, uint32_t k, float depth, float bias) const;
 
   // Lit-sample count for the same kernel (pcf_lit_fraction = count / k^2), for callers that split a
