@@ -6,6 +6,8 @@
 #include <limits>
 #include <type_traits>
 
+#include "codec/json_integer.hpp"
+
 namespace shadowtiles {
 namespace {
 
@@ -28,24 +30,15 @@ template <class T>
 Result<T> field(const nlohmann::json& json, const char* name) {
   if (!json.contains(name)) return make_error(ErrorCode::corrupt_data, std::string("meta: missing '") + name + "'");
   if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
-    // nlohmann converts a float to an integer by a cast, undefined beyond the type's range (UBSan,
-    // found by the long fuzz_store_meta run), and a wider integer by truncation: a count is an
-    // integer that fits, or the meta is corrupt.
-    const nlohmann::json& value = json.at(name);
-    bool fits = false;
-    if (value.is_number_unsigned()) {
-      fits = value.get<uint64_t>() <= uint64_t(std::numeric_limits<T>::max());
-    } else if (value.is_number_integer()) {
-      const int64_t v = value.get<int64_t>();
-      fits = v >= int64_t(std::numeric_limits<T>::min()) &&
-             (v < 0 || uint64_t(v) <= uint64_t(std::numeric_limits<T>::max()));
-    }
-    if (!fits)
+    // A count is an integer that fits its type, or the meta is corrupt (codec/json_integer.hpp).
+    const auto value =
+        json_integer_in<T>(json.at(name), std::numeric_limits<T>::min(), std::numeric_limits<T>::max());
+    if (!value)
       return make_error(ErrorCode::corrupt_data,
                         std::string("meta: bad '") + name + "': not an integer in [" +
                             std::to_string(std::numeric_limits<T>::min()) + ", " +
                             std::to_string(std::numeric_limits<T>::max()) + "]");
-    return T(value.is_number_unsigned() ? T(value.get<uint64_t>()) : T(value.get<int64_t>()));
+    return *value;
   }
   try {
     return json.at(name).get<T>();

@@ -4,9 +4,11 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include "client/shadow_map.hpp"
+#include "codec/json_integer.hpp"
 
 namespace shadowtiles::server {
 namespace {
@@ -19,11 +21,9 @@ Error bad(const std::string& key, const std::string& why) {
 template <class T>
 Status read_uint(const nlohmann::json& value, const std::string& key, uint64_t lo, uint64_t hi, T& out) {
   if (!value.is_number_integer()) return bad(key, "expected an integer");
-  const bool negative = !value.is_number_unsigned() && value.get<int64_t>() < 0;
-  const uint64_t v = negative ? 0 : value.get<uint64_t>();
-  if (negative || v < lo || v > hi)
-    return bad(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-  out = T(v);
+  const std::optional<uint64_t> v = json_integer_in<uint64_t>(value, lo, hi);
+  if (!v) return bad(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  out = T(*v);
   return {};
 }
 
