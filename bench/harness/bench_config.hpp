@@ -16,7 +16,8 @@
 //   pcf_kernels     [3, 5] odd kernel sides
 //   pcf_supersample s: ground-truth PCF traces s x s jittered samples per kernel texel
 //   threads         [1, 2] lookup threads
-//   min_seconds     every timed lookup loop runs at least this long (after a warm-up pass)
+//   min_seconds     every timed lookup loop runs at least this long in all (after a warm-up pass), in 5
+//                   rounds whose best rate is reported (bench/harness/lookup_rate.hpp)
 //   cache_mib       ShadowMap tile cache budget
 //   keep_stores     keep the built stores under OUT/stores (default false: removed when measured)
 //   seed            receiver sampling seed

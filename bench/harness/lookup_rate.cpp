@@ -75,6 +75,30 @@ Result<LookupRate> timed_cyclic_lookups(std::span<const Vec3> points, unsigned t
   return rate;
 }
 
+// A timed measurement in rounds; the rate reported is the best round's (lookups and seconds are the
+// totals). On a shared machine a neighbour's burst slows some rounds and the one-window rate with
+// it (the same PCF/point cell read 1.77 and 3.86 in two runs of unchanged code); the best round is
+// the code's own speed. Both sides of every ratio (store and Embree, 1 and 2 threads, point and
+// PCF) are measured this way.
+constexpr unsigned kRounds = 5;
+
+template <typename Measure>
+Result<LookupRate> best_of_rounds(double min_seconds, const Measure& measure) {
+  LookupRate best;
+  uint64_t lookups = 0;
+  double seconds = 0;
+  for (unsigned round = 0; round < kRounds; ++round) {
+    Result<LookupRate> rate = measure(min_seconds / kRounds);
+    if (!rate) return rate.error();
+    lookups += rate->lookups;
+    seconds += rate->seconds;
+    if (rate->lookups_per_second > best.lookups_per_second) best = *rate;
+  }
+  best.lookups = lookups;
+  best.seconds = seconds;
+  return best;
+}
+
 }  // namespace
 
 Result<LookupRate> measure_lookup_rate(const ShadowMap& map, store::Method method, std::span<const Vec3> points,
@@ -88,8 +112,10 @@ Result<LookupRate> measure_lookup_rate(const ShadowMap& map, store::Method metho
   }
   if (sink < 0) std::abort();
   const uint64_t misses_before = map.cache_stats().misses;
-  auto rate = timed_cyclic_lookups(points, threads, min_seconds,
-                                   [&](const Vec3& p) { return look_up(map, method, p, kernel); });
+  auto rate = best_of_rounds(min_seconds, [&](double seconds) {
+    return timed_cyclic_lookups(points, threads, seconds,
+                                [&](const Vec3& p) { return look_up(map, method, p, kernel); });
+  });
   if (!rate) return rate.error();
   rate->cache_misses = map.cache_stats().misses - misses_before;
   return rate;
@@ -101,7 +127,9 @@ LookupRate measure_point_rate(std::span<const Vec3> points, unsigned threads, do
   double sink = 0;
   for (const Vec3& p : points) sink += look_up(p);  // warm-up
   if (sink < 0) std::abort();
-  return *timed_cyclic_lookups(points, threads, min_seconds, look_up);  // look_up cannot fail
+  return *best_of_rounds(min_seconds, [&](double seconds) {
+    return timed_cyclic_lookups(points, threads, seconds, look_up);  // look_up cannot fail
+  });
 }
 
 Result<LookupRate> measure_batch_rate(const ShadowMap& map, store::Method method, std::span<const Vec3> points,
@@ -115,12 +143,17 @@ Result<LookupRate> measure_batch_rate(const ShadowMap& map, store::Method method
   if (Status s = map.query_batch(points, method, options, answers); !s) return s.error();  // warm-up
   const uint64_t misses_before = map.cache_stats().misses;
   const auto start = Clock::now();
-  do {
+  unsigned batches = 0;
+  do {  // each batch is a round (best_of_rounds): the best batch's rate is reported
+    const auto batch_start = Clock::now();
     if (Status s = map.query_batch(points, method, options, answers); !s) return s.error();
+    const double batch_seconds = std::chrono::duration<double>(Clock::now() - batch_start).count();
+    if (batch_seconds > 0)
+      rate.lookups_per_second = std::max(rate.lookups_per_second, double(points.size()) / batch_seconds);
     rate.lookups += points.size();
     rate.seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  } while (rate.seconds < min_seconds);
-  rate.lookups_per_second = double(rate.lookups) / rate.seconds;
+    ++batches;
+  } while (rate.seconds < min_seconds || batches < 3);
   rate.cache_misses = map.cache_stats().misses - misses_before;
   return rate;
 }

@@ -3,7 +3,8 @@
 // PCF k x k, over a fixed list of points visited in the given order, on 1..n threads.
 // Method: one untimed warm-up pass over all points (so their tiles are decoded and cached), then
 // every thread walks the list cyclically (thread i starting at i/n of it, so each keeps the order's
-// coherence) until `min_seconds` of wall time have passed; rate = all lookups / wall time.
+// coherence) for 5 rounds of `min_seconds` / 5 of wall time each; rate = the best round's lookups /
+// its wall time (a shared machine's bursts slow some rounds; lookup_rate.cpp, best_of_rounds).
 // Cache misses during the timed loops are reported: non-zero means the cache budget is too small
 // for the points' tiles and the rate includes decoding.
 // Errors: the first query error (corrupt tile, unknown method).
@@ -33,8 +34,8 @@ Result<LookupRate> measure_lookup_rate(const ShadowMap& map, store::Method metho
 LookupRate measure_point_rate(std::span<const Vec3> points, unsigned threads, double min_seconds,
                               const std::function<double(const Vec3&)>& look_up);
 
-// ShadowMap::query_batch over all `points` at once, repeated until `min_seconds` passed (after one
-// untimed warm-up batch); rate = points answered / wall time.
+// ShadowMap::query_batch over all `points` at once, repeated until `min_seconds` passed and at least
+// 3 times (after one untimed warm-up batch); rate = the best batch's points / its wall time.
 Result<LookupRate> measure_batch_rate(const ShadowMap& map, store::Method method, std::span<const Vec3> points,
                                       unsigned kernel, unsigned threads, double min_seconds);
 
