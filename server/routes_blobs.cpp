@@ -50,11 +50,10 @@ bool check_build_id(const ShadowMap& map, const std::string& id, httplib::Respon
 }
 
 // Blob bodies sent straight from the store's map (no copy into the response) at once. Each holds
-// an LMDB read transaction until its send ends; past this many, bodies are copied and the
-// transaction ends with the handler, so slow clients cannot use up the store's 126 reader slots
+// an LMDB read transaction until its send ends; past config.max_pinned_sends, bodies are copied and
+// the transaction ends with the handler, so slow clients cannot use up the store's 126 reader slots
 // (max_connections may be set higher), which the query workers' tile reads need too.
-constexpr int kMaxPinnedSends = 48;
-std::atomic<int> pinned_sends{0};
+std::atomic<unsigned> pinned_sends{0};
 
 // A blob in the snapshot's map, kept valid (with the build that owns the store) while a send of it
 // is in flight.
@@ -106,7 +105,7 @@ void serve_blob(ServiceState& state, std::shared_ptr<const ShadowMap> held, bool
   if (not_modified(state, req, res, etag, versioned)) return;
   res.status = 200;
   const std::span<const uint8_t> bytes = **view;
-  if (pinned_sends.load(std::memory_order_relaxed) >= kMaxPinnedSends) {
+  if (pinned_sends.load(std::memory_order_relaxed) >= state.config.max_pinned_sends) {
     res.set_content(reinterpret_cast<const char*>(bytes.data()), bytes.size(), "application/octet-stream");
     return;
   }

@@ -46,6 +46,8 @@ Status ServerConfig::validate() const {
   if (body_timeout_s < 1 || body_timeout_s > 3600) return bad("body_timeout_s", "must be in [1, 3600]");
   if (max_connections < threads) return bad("max_connections", "must be at least `threads`");
   if (max_connections > 4096) return bad("max_connections", "must be at most 4096 (one I/O thread each)");
+  // LMDB has 126 reader slots per process; the query workers' tile reads need some of them.
+  if (max_pinned_sends > 100) return bad("max_pinned_sends", "must be in [0, 100] (LMDB has 126 reader slots)");
   if (max_batch_cost < 1) return bad("max_batch_cost", "must be at least 1");
   if (query_wait_ms < 1 || query_wait_ms > 600000) return bad("query_wait_ms", "must be in [1, 600000]");
   if (keep_alive_max_count < 1) return bad("keep_alive_max_count", "must be at least 1");
@@ -75,6 +77,7 @@ nlohmann::json ServerConfig::to_json() const {
           {"write_timeout_s", write_timeout_s},
           {"max_connections", max_connections},
           {"max_connections_per_address", max_connections_per_address},
+          {"max_pinned_sends", max_pinned_sends},
           {"max_batch_cost", max_batch_cost},
           {"query_wait_ms", query_wait_ms},
           {"keep_alive_max_count", keep_alive_max_count},
@@ -130,6 +133,7 @@ Result<ServerConfig> ServerConfig::from_json(const nlohmann::json& json, ServerC
       {"max_connections", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.max_connections); }},
       {"max_connections_per_address",
        [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.max_connections_per_address); }},
+      {"max_pinned_sends", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.max_pinned_sends); }},
       {"max_batch_cost", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU64, config.max_batch_cost); }},
       {"query_wait_ms", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.query_wait_ms); }},
       {"keep_alive_max_count",

@@ -25,7 +25,8 @@ TEST(ServerConfig, StrictParsingAndOverrides) {
   for (const json& bad : {json{{"prot", 8080}}, json{{"port", 70000}}, json{{"port", -1}}, json{{"port", "80"}},
                           json{{"threads", 0}}, json{{"threads", 2.5}}, json{{"max_pcf", 4}}, json{{"max_pcf", 99}},
                           json{{"cors_origins", "https://a.example"}}, json{{"cors_origins", {"*"}}},
-                          json{{"read_timeout_s", 0}}, json{{"max_connections", 1}}, json::array()}) {
+                          json{{"read_timeout_s", 0}}, json{{"max_connections", 1}}, json{{"max_pinned_sends", 101}},
+                          json::array()}) {
     auto parsed = server::ServerConfig::from_json(bad);
     EXPECT_FALSE(parsed.ok()) << bad.dump();
     if (!parsed.ok()) {

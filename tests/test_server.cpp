@@ -192,6 +192,50 @@ TEST_F(ServerTest, QueryOptionsLevelAndBias) {
   EXPECT_EQ(body["outside_map"], true);
 }
 
+// Past max_pinned_sends a blob body is copied into the response instead of sent from the map: the
+// same bytes and headers. A second server with the limit at 0 (every body copied) serves a copy of
+// the store (LMDB allows one environment per file per process).
+TEST_F(ServerTest, CopiedTileSendsAreTheSameAsPinnedOnes) {
+  const std::filesystem::path copy = dir_->path() / "copied_sends.store";
+  std::filesystem::copy(store_, copy, std::filesystem::copy_options::recursive);
+  server::ServerConfig config = test_config();
+  config.max_pinned_sends = 0;
+  RunningServer copying(config, &copy);
+  auto pinned_client = server_->client();
+  auto copied_client = copying.client();
+  const TileLayout& layout = reference_->layout();
+  size_t compared = 0;
+  for (store::Method method : reference_->meta().methods) {
+    for (uint32_t y = 0; y < layout.tiles_per_side(); ++y) {
+      for (uint32_t x = 0; x < layout.tiles_per_side(); ++x) {
+        const std::string url = std::string("/v1/tiles/") + store::method_name(method) + "/2/" + std::to_string(x) +
+                                "/" + std::to_string(y);
+        auto pinned = pinned_client.Get(url);
+        auto copied = copied_client.Get(url);
+        ASSERT_TRUE(pinned && copied) << url;
+        ASSERT_EQ(copied->status, pinned->status) << url;
+        if (pinned->status != 200) continue;
+        auto stored = reference_->local_store()->get(store::Database::tiles, store::encode_tile_key({method, 2, x, y}));
+        ASSERT_TRUE(stored.ok() && stored->has_value()) << url;
+        EXPECT_EQ(copied->body, std::string((*stored)->begin(), (*stored)->end())) << url;
+        EXPECT_EQ(copied->body, pinned->body) << url;
+        EXPECT_EQ(copied->get_header_value("ETag"), pinned->get_header_value("ETag")) << url;
+        EXPECT_EQ(copied->get_header_value("Content-Length"), pinned->get_header_value("Content-Length")) << url;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GT(compared, 10u) << "the bunny store has tiles to compare";
+  // The skip list goes the same way.
+  auto skip_pinned = pinned_client.Get("/v1/skiplist?method=mh");
+  auto skip_copied = copied_client.Get("/v1/skiplist?method=mh");
+  ASSERT_TRUE(skip_pinned && skip_copied);
+  ASSERT_EQ(skip_pinned->status, 200);
+  EXPECT_EQ(skip_copied->status, 200);
+  EXPECT_FALSE(skip_copied->body.empty());
+  EXPECT_EQ(skip_copied->body, skip_pinned->body);
+}
+
 TEST_F(ServerTest, TilesAreTheStoredBlobsWithEtagsAnd304) {
   auto cli = server_->client();
   const TileLayout& layout = reference_->layout();
