@@ -1,6 +1,7 @@
 // Shared by the HTTP tests (test_server.cpp: routes and bad input; test_server_blobs.cpp: the blob
-// routes; test_serve_process.cpp: the `serve` process, its config and reloads): the bunny test store, the server config, a server on
-// its own thread, and encoders of request bodies and checks of answers.
+// routes; test_serve_process.cpp: the `serve` process, its config and reloads): the bunny test
+// store, the server config, a server on its own thread, and encoders of request bodies and checks of
+// answers.
 #pragma once
 
 #include <gtest/gtest.h>
