@@ -23,28 +23,33 @@ namespace {
 using BatchItem = ShadowMap::BatchSortItem;
 constexpr uint64_t kOffMap = ~uint64_t(0);
 constexpr unsigned kBucketBits = 12;
-constexpr size_t kPointsPerChunk = 8192;
+constexpr size_t kMinPointsPerChunk = 8192;
+constexpr size_t kChunksPerBatch = 16;
 constexpr size_t kQueryBlock = 256;  // point queries handed to a decoder at once
 
-// Sorts items[0, n) by key's low `bits` bits (the high bits are equal), `scratch` of n items.
-void sort_low_bits(BatchItem* items, BatchItem* scratch, size_t n, unsigned bits) {
+// Orders items[0, n) by the key's low `bits` bits (the bits above are equal), `scratch` of n items:
+// counting passes on 8-bit digits sort just the top digits, enough that about kSmallGroup items
+// share a value of the sorted bits, and at least every bit from `keep_below` up (the tile's bits,
+// so each tile's points stay one run). The bits below stay unordered: the decoders resume from the
+// deepest node two neighbours share, computed from their coordinates, so the order inside a small
+// group changes no answer and little sharing, while finishing it (an insertion sort, or a second
+// pass) cost half of the batch's sort time (fzk_haus 16384², 1M points: ~500 per bucket).
+constexpr size_t kSmallGroup = 4;
+void sort_low_bits(BatchItem* items, BatchItem* scratch, size_t n, unsigned bits, unsigned keep_below) {
   if (n < 2 || bits == 0) return;
-  if (n <= 48) {  // insertion sort: cheaper than counting passes for a handful
-    for (size_t i = 1; i < n; ++i) {
-      BatchItem x = items[i];
-      size_t j = i;
-      for (; j > 0 && items[j - 1].key > x.key; --j) items[j] = items[j - 1];
-      items[j] = x;
-    }
-    return;
-  }
+  unsigned sorted_bits = 0;  // a multiple of 8 (or all the bits)
+  while (sorted_bits < bits && ((n >> sorted_bits) > kSmallGroup || bits - sorted_bits > keep_below))
+    sorted_bits += 8;
+  sorted_bits = std::min(sorted_bits, bits);
   BatchItem* from = items;
   BatchItem* to = scratch;
-  for (unsigned shift = 0; shift < bits; shift += 8) {
+  for (unsigned shift = bits - sorted_bits; shift < bits; shift += 8) {  // least significant first
+    const unsigned digit_bits = std::min(8u, bits - shift);
+    const uint64_t digit_mask = (uint64_t(1) << digit_bits) - 1;
     uint32_t count[257] = {};
-    for (size_t i = 0; i < n; ++i) ++count[((from[i].key >> shift) & 0xff) + 1];
-    for (unsigned d = 0; d < 256; ++d) count[d + 1] += count[d];
-    for (size_t i = 0; i < n; ++i) to[count[(from[i].key >> shift) & 0xff]++] = from[i];
+    for (size_t i = 0; i < n; ++i) ++count[((from[i].key >> shift) & digit_mask) + 1];
+    for (unsigned d = 0; d < digit_mask; ++d) count[d + 1] += count[d];
+    for (size_t i = 0; i < n; ++i) to[count[(from[i].key >> shift) & digit_mask]++] = from[i];
     std::swap(from, to);
   }
   if (from != items) std::copy(from, from + n, items);
@@ -101,7 +106,9 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   const unsigned bucket_bits = std::min(key_bits, kBucketBits);
   const unsigned low_bits = key_bits - bucket_bits;
   const size_t buckets = size_t(1) << bucket_bits;  // + 1: off the map
-  const size_t chunks = (n + kPointsPerChunk - 1) / kPointsPerChunk;
+  // A few chunks per worker: the histograms (chunks x buckets) and their serial prefix sum stay small.
+  const size_t points_per_chunk = std::max(kMinPointsPerChunk, (n + kChunksPerBatch - 1) / kChunksPerBatch);
+  const size_t chunks = (n + points_per_chunk - 1) / points_per_chunk;
   // Buffers kept in `out` between batches (see BatchAnswers); their old contents are overwritten.
   if (out.sort_items.size() < 2 * n) out.sort_items.resize(2 * n);
   BatchItem* const items = out.sort_items.data();
@@ -115,7 +122,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   parallel_for(chunks, [&](size_t c0, size_t c1) {
     for (size_t c = c0; c < c1 && !failed; ++c) {
       uint32_t* hist = &histogram[c * (buckets + 1)];
-      for (size_t i = c * kPointsPerChunk, end = std::min(n, i + kPointsPerChunk); i < end; ++i) {
+      for (size_t i = c * points_per_chunk, end = std::min(n, i + points_per_chunk); i < end; ++i) {
         const Vec3& p = points[i];
         if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
           return fail(make_error(ErrorCode::invalid_input, "point coordinates must be finite"));
@@ -153,7 +160,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   parallel_for(chunks, [&](size_t c0, size_t c1) {
     for (size_t c = c0; c < c1; ++c) {
       uint32_t* offset = &histogram[c * (buckets + 1)];
-      for (size_t i = c * kPointsPerChunk, end = std::min(n, i + kPointsPerChunk); i < end; ++i)
+      for (size_t i = c * points_per_chunk, end = std::min(n, i + points_per_chunk); i < end; ++i)
         sorted[offset[bucket_of(items[i].key)]++] = items[i];
     }
   });
@@ -180,7 +187,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
       if (s == e) continue;
       // Always sorted, even sparse buckets whose points share no node below the skip-list entry:
       // skipping the sort saved 10-15% of MH/DAG-MH instructions but cost 6-10% of their time.
-      sort_low_bits(&sorted[s], &items[s], e - s, low_bits);
+      sort_low_bits(&sorted[s], &items[s], e - s, low_bits, tile_key_shift);
       for (uint32_t run = s; run < e && !failed;) {
         const uint64_t id = sorted[run].key >> tile_key_shift;
         uint32_t run_end = run + 1;
