@@ -1,7 +1,8 @@
 // DAG-MH batch lookups against the per-query ones, on synthetic tiles for every treelet height and
 // skip-list level: lit_sorted == threshold <= lookup(), pcf_count_sorted == pcf_lit_count() for
 // every box corner of the tile in Morton order (boxes sharing descents), for sparse sorted subsets
-// (descents resuming from far-apart paths) and for unsorted corners, kernels 1..8.
+// (descents resuming from far-apart paths), for dense corners shuffled inside 4x4 groups and for
+// unsorted corners, kernels 1..8.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -77,6 +78,12 @@ TEST(DagMhBatch, SortedPcfCountsEqualPerBoxCountsForEveryTreeletHeightAndSkipLev
           std::vector<TexelQuery> sparse;
           for (size_t i = 0; i < all.size(); i += 37) sparse.push_back(all[i]);
           expect_batch_equals_single(*view, sparse, k, (what + " sparse").c_str());
+          // Dense, sorted by 4x4-texel groups only and shuffled inside each (the order query_batch
+          // hands the decoders: its sort stops at about 4 points per group).
+          std::vector<TexelQuery> grouped = all;
+          for (size_t g = 0; g < grouped.size(); g += 16)
+            std::shuffle(grouped.begin() + g, grouped.begin() + std::min(grouped.size(), g + 16), rng);
+          expect_batch_equals_single(*view, grouped, k, (what + " grouped").c_str());
           // Unsorted: still answered correctly.
           std::vector<TexelQuery> shuffled = sparse;
           std::shuffle(shuffled.begin(), shuffled.end(), rng);

@@ -1,6 +1,7 @@
 // MH/MMH batch point lookups against the per-query ones: lit_sorted == threshold <= lookup() for
 // dense Morton-sorted queries (shared descents) and for sparse ones spread over deep trees (the
-// interleaved walks with prefetch), for every skip-list level, MH and MMH, and for unsorted input.
+// interleaved walks with prefetch), for every skip-list level, MH and MMH, for dense input shuffled
+// inside small groups (query_batch's order) and for unsorted input.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,15 +16,20 @@
 namespace shadowtiles {
 namespace {
 
-// `count` random texels of a size^2 tile, Morton-sorted when `sorted`, thresholds near the stored values.
-std::vector<TexelQuery> queries(const MhTileView& view, uint32_t size, size_t count, bool sorted, std::mt19937& rng) {
+enum class Order { sorted, grouped, unsorted };
+
+// `count` random texels of a size^2 tile in `order` (Morton), thresholds near the stored values.
+std::vector<TexelQuery> queries(const MhTileView& view, uint32_t size, size_t count, Order order, std::mt19937& rng) {
   std::vector<std::pair<uint64_t, TexelQuery>> keyed;
   for (size_t i = 0; i < count; ++i) {
     const uint32_t u = rng() % size, v = rng() % size;
     const float threshold = view.lookup(u, v) + (float(rng() % 200) - 100.0f) * 1e-4f;
     keyed.push_back({morton_encode(u, v), TexelQuery{u, v, threshold}});
   }
-  if (sorted) std::sort(keyed.begin(), keyed.end(), [](auto& a, auto& b) { return a.first < b.first; });
+  if (order != Order::unsorted) std::sort(keyed.begin(), keyed.end(), [](auto& a, auto& b) { return a.first < b.first; });
+  if (order == Order::grouped)  // shuffled inside runs of 16 (query_batch stops its sort at ~4 per group)
+    for (size_t g = 0; g < keyed.size(); g += 16)
+      std::shuffle(keyed.begin() + g, keyed.begin() + std::min(keyed.size(), g + 16), rng);
   std::vector<TexelQuery> out;
   for (auto& [key, q] : keyed) out.push_back(q);
   return out;
@@ -40,11 +46,12 @@ TEST(MhBatch, SortedAndSparseBatchesEqualPerQueryLookups) {
     for (const MhTileViews::Entry& entry : views.views) {
       const MhTileView* view = &entry.view;
       const unsigned skip = entry.skip;
-      // 300 points over 1M texels: sparse (interleaved walks); 20,000: dense (shared descents);
-      // 2,000 unsorted; 9 (below the sparse test's minimum); and coarser levels.
-      for (size_t count : {300u, 20000u, 2000u, 9u}) {
-        const bool sorted = count != 2000;
-        const std::vector<TexelQuery> q = queries(*view, kSize, count, sorted, rng);
+      // 300 points over 1M texels: sparse (interleaved walks); 20,000: dense (shared descents), also
+      // shuffled inside groups of 16; 2,000 unsorted; 9 (below the sparse test's minimum); and
+      // coarser levels.
+      for (auto [count, order] : {std::pair{300u, Order::sorted}, {20000u, Order::sorted}, {20000u, Order::grouped},
+                                  {2000u, Order::unsorted}, {9u, Order::sorted}}) {
+        const std::vector<TexelQuery> q = queries(*view, kSize, count, order, rng);
         for (unsigned max_level : {kMhAllLevels, 9u, 7u}) {
           std::vector<uint8_t> lit(q.size(), 2);
           view->lit_sorted(q, max_level, lit.data());
