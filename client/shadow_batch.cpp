@@ -2,7 +2,8 @@
 //   A. per chunk of points: light-space transform, Morton key of the texel, biased depth, and a
 //      histogram of the keys' top bits (buckets; points off the map go to an extra last bucket);
 //   B. per chunk: stable scatter into the buckets (one counting-sort pass over the whole batch);
-//   C. workers claim buckets: sort the bucket's low key bits in cache (LSD radix), then walk its runs
+//   C. workers claim buckets: order the bucket's low key bits in cache (counting passes on the top
+//      digits only, sort_low_bits), then walk its runs
 //      of points per tile: the tile is looked up once per run, point queries go to the decoder's
 //      shared-path walk (lit_sorted), PCF kernels inside the tile to lit_count_sorted (descents to the
 //      kernels' common ancestors shared along the curve), kernels crossing a
@@ -185,7 +186,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
     for (size_t b; !failed && (b = next_bucket.fetch_add(1, std::memory_order_relaxed)) < buckets;) {
       const uint32_t s = bucket_start[b], e = bucket_start[b + 1];
       if (s == e) continue;
-      // Always sorted, even sparse buckets whose points share no node below the skip-list entry:
+      // Always ordered, even sparse buckets whose points share no node below the skip-list entry:
       // skipping the sort saved 10-15% of MH/DAG-MH instructions but cost 6-10% of their time.
       sort_low_bits(&sorted[s], &items[s], e - s, low_bits, tile_key_shift);
       for (uint32_t run = s; run < e && !failed;) {
