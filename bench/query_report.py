@@ -200,15 +200,21 @@ def section(rows, runs, notes, block):
     out += ["", "### Cost, latency, cold start, memory", "",
             "pcf3/point = point rate / PCF 3x3 rate (rows, 1 thread; batch: query_batch, 1 thread); latency: one "
             "warm single-point query at a time, random order; cold = the first 1M-point batch on a freshly opened "
-            "store (2 threads; blob bytes read); decoded = every tile of the method decoded (the cache's bytes); "
+            "store (2 threads; blob bytes read); HTTP POST = the same batch POSTed (binary) to a `shadowtiles serve` "
+            "that has just opened the store, on loopback (seconds to the whole answer; blob bytes the server read); "
+            "stream = a streaming client (ShadowMap over HTTP, empty cache) answering it from that server (seconds "
+            "including its open; blob bytes fetched over HTTP); decoded = every tile of the method decoded (the cache's bytes); "
             "cache peak and RSS during the lookup runs (the process also holds the scene, the ground-truth BVH and "
             "the other methods' tiles).", ""]
     out.append(table(["scene", "res", "method", "pcf3/point", "batch pcf3/point", "p50 µs", "p99 µs", "cold s",
-                      "cold read", "payload", "decoded", "decoded/payload", "cache peak", "RSS MiB"],
+                      "cold read", "HTTP POST s", "server read", "stream s", "fetched", "payload", "decoded",
+                      "decoded/payload", "cache peak", "RSS MiB"],
                      [[r["scene"], res_label(r["resolution"]), r["method"], f2(num(r, "pcf3_over_point_cost")),
                        f2(num(r, "batch_pcf3_over_point_cost")), f2(num(r, "point_latency_p50_us")),
                        f2(num(r, "point_latency_p99_us")), f2(num(r, "cold_batch_s"), 3),
-                       fmt_bytes(num(r, "cold_batch_bytes_read")), fmt_bytes(num(r, "payload_bytes")),
+                       fmt_bytes(num(r, "cold_batch_bytes_read")), f2(num(r, "cold_http_post_s"), 3),
+                       fmt_bytes(num(r, "cold_http_post_bytes_read")), f2(num(r, "cold_http_stream_s"), 3),
+                       fmt_bytes(num(r, "cold_http_stream_bytes")), fmt_bytes(num(r, "payload_bytes")),
                        fmt_bytes(num(r, "decoded_bytes")), f2(num(r, "decoded_over_payload")),
                        fmt_bytes(num(r, "cache_peak_bytes")), f2(num(r, "lookup_rss_mib"), 0)] for r in rows]))
     out += ["", end]

@@ -108,6 +108,8 @@ std::string Metrics::render(const std::optional<CacheStats>& cache) const {
     single("shadowtiles_tile_cache_hits_total", "counter", "Decoded tile cache hits.", cache->hits);
     single("shadowtiles_tile_cache_misses_total", "counter", "Decoded tile cache misses (tile read and decoded).",
            cache->misses);
+    single("shadowtiles_tile_cache_fetched_bytes_total", "counter",
+           "Stored blob bytes read into the tile cache (compressed, as stored).", cache->fetched_bytes);
     single("shadowtiles_tile_cache_bytes", "gauge", "Bytes held by decoded tiles in the cache.", cache->bytes);
     single("shadowtiles_tile_cache_tiles", "gauge", "Tiles in the cache (empty tiles included).", cache->tiles);
   }

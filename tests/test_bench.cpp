@@ -107,6 +107,14 @@ TEST(Bench, TinyRunWritesSaneFigures) {
     EXPECT_GE(row["pcf3_mae"].get<double>(), 0) << what;
     EXPECT_LT(row["pcf3_mae"].get<double>(), 0.2) << what;
     EXPECT_GT(row["build_method_encode_s"].get<double>(), 0) << what;  // each method's own encode time
+    // Cold starts of the first batch: local, POSTed to a fresh server, and through a streaming client
+    // fetching over HTTP. All three read the same tiles (every tile with geometry: 1M surface points).
+    ASSERT_TRUE(row.contains("cold_http_post_s")) << what;
+    EXPECT_GT(row["cold_http_post_s"].get<double>(), 0) << what;
+    EXPECT_GT(row["cold_http_stream_s"].get<double>(), 0) << what;
+    EXPECT_GT(row["cold_batch_bytes_read"].get<uint64_t>(), 0u) << what;
+    EXPECT_EQ(row["cold_http_stream_bytes"].get<uint64_t>(), row["cold_batch_bytes_read"].get<uint64_t>()) << what;
+    EXPECT_EQ(row["cold_http_post_bytes_read"].get<uint64_t>(), row["cold_batch_bytes_read"].get<uint64_t>()) << what;
     const std::string method = row["method"];
     if (std::find(std::begin(kLossless), std::end(kLossless), method) == std::end(kLossless)) continue;
     const auto& ref = raw[row["scene"]];

@@ -1,4 +1,5 @@
 #include "bench/harness/bench_runner.hpp"
+#include "bench/harness/http_cold_start.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -232,6 +233,15 @@ Status measure_store(const BenchConfig& config, const SceneSpec& spec, uint32_t 
       if (Status st = (*cold)->query_batch(data.batch, method, batch, answers); !st) return st.error();
       row["cold_batch_s"] = std::chrono::duration<double>(Clock::now() - start).count();
       row["cold_batch_bytes_read"] = (*cold)->cache_stats().fetched_bytes;
+      // The same first batch over loopback HTTP: POSTed to a fresh server, and by a streaming client.
+      if (http_cold_start_available()) {
+        auto http = measure_http_cold_start(store_dir, method, data.batch, batch.threads, options.cache_bytes);
+        if (!http) return http.error();
+        row["cold_http_post_s"] = http->post_seconds;
+        row["cold_http_post_bytes_read"] = http->post_bytes_read;
+        row["cold_http_stream_s"] = http->stream_seconds;
+        row["cold_http_stream_bytes"] = http->stream_bytes_fetched;
+      }
       std::vector<TileCoord> all;
       for (uint32_t y = 0; y < (*cold)->layout().tiles_per_side(); ++y)
         for (uint32_t x = 0; x < (*cold)->layout().tiles_per_side(); ++x) all.push_back({x, y});
