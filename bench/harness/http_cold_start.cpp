@@ -1,6 +1,7 @@
 #include "bench/harness/http_cold_start.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <chrono>
 #include <cstring>
@@ -51,10 +52,18 @@ uint64_t metric_value(const std::string& text, const std::string& name) {
 struct RunningServer {
   std::unique_ptr<server::Server> server;
   std::thread thread;
+  std::atomic<bool> finished{false};
+  void start() {
+    thread = std::thread([this] {
+      (void)server->run();
+      finished = true;
+    });
+  }
   ~RunningServer() {
-    if (!server) return;
-    server->stop();
-    if (thread.joinable()) thread.join();
+    if (!thread.joinable()) return;
+    // A stop() racing with the very start of run() can be missed (server.hpp): repeat it.
+    for (server->stop(); !finished; server->stop()) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    thread.join();
   }
 };
 
@@ -78,7 +87,7 @@ Result<HttpColdStart> measure_http_cold_start(const std::filesystem::path& store
   RunningServer running;
   running.server = std::move(*bound);
   if (Status s = running.server->attach_store(store_dir); !s) return s.error();
-  running.thread = std::thread([&running] { (void)running.server->run(); });
+  running.start();
   const int port = running.server->port();
 
   HttpColdStart out;
