@@ -4,11 +4,11 @@
 #include <atomic>
 #include <bit>
 #include <chrono>
-#include <cstring>
 #include <string>
 #include <thread>
 
 #include "client/shadow_map.hpp"
+#include "common/byte_order.hpp"
 
 #ifdef SHADOWTILES_HAVE_SERVER
 #include <httplib.h>
@@ -34,10 +34,9 @@ using Clock = std::chrono::steady_clock;
 std::string binary_body(std::span<const Vec3> points) {
   std::string body(points.size() * 12, '\0');
   for (size_t i = 0; i < points.size(); ++i)
-    for (size_t axis = 0; axis < 3; ++axis) {
-      const uint32_t bits = std::bit_cast<uint32_t>(float(points[i][axis]));
-      for (int b = 0; b < 4; ++b) body[i * 12 + axis * 4 + b] = char((bits >> (8 * b)) & 0xff);
-    }
+    for (size_t axis = 0; axis < 3; ++axis)
+      bytes::store_le(reinterpret_cast<uint8_t*>(body.data()) + i * 12 + axis * 4,
+               std::bit_cast<uint32_t>(float(points[i][axis])));
   return body;
 }
 
