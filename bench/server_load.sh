@@ -12,7 +12,8 @@
 #
 # Usage: bench/server_load.sh [BUILD_DIR] [SCENE] [RESOLUTION] [TILE]
 #   defaults: build  ../shared/scenes/bunny/stanford-bunny.obj  2048  512
-# Env: DURATION (wrk seconds per run, default 10), CONNECTIONS (wrk connection counts to run, default
+# Env: DURATION (wrk seconds per run, default 10), ROUNDS (alternated rounds of every connection count,
+#      default 3; the summary gives medians and their ratios), CONNECTIONS (wrk connection counts to run, default
 #      "2 64": one per server thread, then as many keep-alive clients as max_connections: each has
 #      its own I/O thread, query work shares the THREADS query slots), THREADS (server, default 2),
 #      METHOD (GET rows, default raw), BATCH_METHODS (batch rows, default "raw mh dagmh"), UP (scene up
@@ -26,6 +27,7 @@ SCENE=${2:-../shared/scenes/bunny/stanford-bunny.obj}
 RESOLUTION=${3:-2048}
 TILE=${4:-512}
 DURATION=${DURATION:-10}
+ROUNDS=${ROUNDS:-3}
 CONNECTIONS=${CONNECTIONS:-2 64}
 THREADS=${THREADS:-2}
 METHOD=${METHOD:-raw}
@@ -89,7 +91,7 @@ with open(f"{work}/batch.bin", "wb") as f:
         f.write(struct.pack("<3f", *(random.uniform(lo[i], hi[i]) for i in range(3))))
 EOF
 
-run_wrk() {  # name script connections
+run_wrk() {  # name script connections round
   local out
   out=$(wrk -t2 -c"$3" -d"${DURATION}s" --latency -s "$2" "$BASE")
   local rps p50 p99 errors
@@ -98,13 +100,40 @@ run_wrk() {  # name script connections
   p99=$(echo "$out" | awk '$1 == "99%" {print $2}')
   errors=$(echo "$out" | awk '/Non-2xx|Socket errors/ {print}' | tr '\n' ' ')
   printf "%-28s %10s req/s   p50 %-9s p99 %-9s %s\n" "$1" "$rps" "$p50" "$p99" "${errors:-no errors}"
+  printf "%s\t%s\t%s\t%s\t%s\n" "$4" "$1" "$3" "$rps" "$p99" >> "$WORK/wrk_rows"
 }
 
-for c in $CONNECTIONS; do
-  echo "== wrk -t2 -c$c -d${DURATION}s"
-  run_wrk "GET /v1/shadow (point)" "$WORK/points.lua" "$c"
-  run_wrk "GET /v1/tiles (blob)" "$WORK/tiles.lua" "$c"
+# Rounds alternate the connection counts (2, 64, 2, 64, ...) so that a shared machine's drift falls
+# on both sides of each ratio; the summary divides medians over the rounds.
+for round in $(seq "$ROUNDS"); do
+  for c in $CONNECTIONS; do
+    echo "== round $round/$ROUNDS: wrk -t2 -c$c -d${DURATION}s"
+    run_wrk "GET /v1/shadow (point)" "$WORK/points.lua" "$c" "$round"
+    run_wrk "GET /v1/tiles (blob)" "$WORK/tiles.lua" "$c" "$round"
+  done
 done
+python3 - "$WORK/wrk_rows" << 'EOF'
+import collections, statistics, sys
+rows = collections.defaultdict(list)  # (route, connections) -> [(rps, p99 text)]
+for line in open(sys.argv[1]):
+    _, route, connections, rps, p99 = line.rstrip("\n").split("\t")
+    rows[route, int(connections)].append((float(rps), p99))
+def ms(text):  # wrk prints 812.00us, 1.23ms, 2.10s
+    for unit, scale in (("us", 1e-3), ("ms", 1.0), ("s", 1e3)):
+        if text.endswith(unit):
+            return float(text[: -len(unit)]) * scale
+    return float("nan")
+print(f"== medians over {max(len(v) for v in rows.values())} alternated rounds (ratio: of the fewest connections' median)")
+for route in dict.fromkeys(route for route, _ in rows):
+    counts = sorted(c for r, c in rows if r == route)
+    base = statistics.median(rps for rps, _ in rows[route, counts[0]])
+    for c in counts:
+        rates = [rps for rps, _ in rows[route, c]]
+        p99s = [ms(p) for _, p in rows[route, c]]
+        print(f"{route:<28} {c:>3} connections  median {statistics.median(rates):>9.0f} req/s"
+              f"  ({statistics.median(rates) / base:.2f})  p99 median {statistics.median(p99s):.2f} ms,"
+              f" worst {max(p99s):.2f} ms")
+EOF
 
 echo "== binary batches of 100k points (POST application/octet-stream), 12 per method on one keep-alive connection"
 for batch_method in $BATCH_METHODS; do
