@@ -1,5 +1,6 @@
 #include "codec/cpvs_decoder.hpp"
 
+#include <cmath>
 #include <limits>
 
 #include "codec/cpvs_tile_view.hpp"
@@ -25,9 +26,19 @@ class CpvsDecodedTile final : public DecodedTile {
     return float(double(step) / double(view_.depth_steps()));
   }
   bool lit(uint32_t u, uint32_t v, float threshold, unsigned) const override { return view_.lit(u, v, threshold); }
-  // Visibility is not a comparison with value() here: both are looked up.
-  Sample sample(uint32_t u, uint32_t v, float threshold, unsigned max_level) const override {
-    return {value(u, v, max_level), lit(u, v, threshold, max_level)};
+  // A point query's answer in one descent to the receiver's voxel. Its value is the bound of that
+  // voxel's depth step that the answer proves (lit: the step's far end, +inf past the last step;
+  // shadowed: just before its near end), so `threshold <= value` iff lit, as for depth maps. The
+  // column's first shadowed step (value()) would cost a search of the column: 3-4x the lookup.
+  Sample sample(uint32_t u, uint32_t v, float threshold, unsigned) const override {
+    const int64_t step = cpvs::depth_step(threshold, view_.depth_steps());
+    if (step == cpvs::kLitBeforeEverything) return {0.0f, true};
+    const double steps = double(view_.depth_steps());
+    if (view_.lit_at_step(u, v, uint32_t(step))) {
+      if (uint32_t(step) + 1 == view_.depth_steps()) return {std::numeric_limits<float>::infinity(), true};
+      return {float(double(step + 1) / steps), true};  // exact: N is a power of two, step < 2^20
+    }
+    return {std::nextafter(float(double(step) / steps), -std::numeric_limits<float>::infinity()), false};
   }
   uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const override {
     return view_.lit_count(u0, v0, kw, kh, threshold);

@@ -1,10 +1,12 @@
 // CPVS encoder + decoder on synthetic tiles: every voxel (u, v, step) of the tile answers as the
 // interval rule demands wherever the rule is not free (exhaustive), through lit_at_step and through
 // lit() at every step's centre; PCF popcounts equal per-texel counting; the first shadowed step
-// agrees with point lookups; identical subtrees merge, and a 1-bit hash changes nothing (the key,
+// agrees with point lookups; a point query's sample() answers as lit() with a value the comparison
+// `threshold <= value` agrees with; identical subtrees merge, and a 1-bit hash changes nothing (the key,
 // not the hash, decides); both leaf layouts.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -80,6 +82,12 @@ void expect_rule_holds(const TileIntervals& tile, uint32_t map_resolution, LeafL
         if (!lit && first_shadow == n) first_shadow = z;
         float centre = (float(z) + 0.5f) / float(n);
         ASSERT_EQ(decoded->lit(u, v, centre), lit) << "lit() quantises like lit_at_step";
+        // A point query's sample: lit() in one descent, with a value that the comparison agrees with.
+        for (float t : {float(z) / float(n), centre, std::nextafter(float(z + 1) / float(n), 0.0f)}) {
+          const DecodedTile::Sample sample = decoded->sample(u, v, t);
+          ASSERT_EQ(sample.lit, decoded->lit(u, v, t)) << u << "," << v << " t " << t;
+          ASSERT_EQ(t <= sample.value, sample.lit) << u << "," << v << " t " << t << " value " << sample.value;
+        }
         if (z < b.lit_end) {
           ASSERT_TRUE(lit) << u << "," << v << " step " << z;
         } else if (z >= b.shadow_begin) {
@@ -183,6 +191,17 @@ TEST(Cpvs, MergingIsDecidedByFullComparisonNotByTheHash) {
     EXPECT_EQ(*a, *b);
   }
   expect_rule_holds(tile, 64, LeafLayout::slab8);
+}
+
+// The inline ref counting equals std::popcount for every 16-bit code word and every child.
+TEST(Cpvs, RefRankCountsLikePopcountForEveryCodeWord) {
+  for (uint32_t codes = 0; codes <= 0xFFFFu; ++codes) {
+    const uint16_t refs = cpvs::ref_bits(uint16_t(codes));
+    ASSERT_EQ(cpvs::ref_count(uint16_t(codes)), unsigned(std::popcount(refs))) << codes;
+    for (unsigned child = 0; child < 8; ++child)
+      ASSERT_EQ(cpvs::ref_rank(uint16_t(codes), child), unsigned(std::popcount(unsigned(refs) & ((1u << (2 * child)) - 1u))))
+          << codes << " child " << child;
+  }
 }
 
 TEST(Cpvs, GoesThroughTheGenericDecoder) {
