@@ -94,7 +94,8 @@ nlohmann::json build_identity(const BuildConfig& config, uint64_t scene_hash, ui
                                  {"max_samples", config.nearly_closed.max_samples},
                                  {"max_patch_triangles", config.nearly_closed.max_patch_triangles},
                                  {"min_full_samples", config.nearly_closed.min_full_samples},
-                                 {"full_budget", config.nearly_closed.full_budget}};
+                                 {"full_budget", config.nearly_closed.full_budget},
+                                 {"max_misplaced_area", config.nearly_closed.max_misplaced_area}};
   return identity;
 }
 
@@ -292,6 +293,7 @@ StoreMeta initial_meta(const BuildConfig& config, const PreparedBuild& build) {
     meta.nearly_closed_max_patch_triangles = config.nearly_closed.max_patch_triangles;
     meta.nearly_closed_min_full_samples = config.nearly_closed.min_full_samples;
     meta.nearly_closed_full_budget = config.nearly_closed.full_budget;
+    meta.nearly_closed_max_misplaced_area = config.nearly_closed.max_misplaced_area;
   }
   return meta;
 }

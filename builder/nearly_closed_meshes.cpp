@@ -7,6 +7,7 @@
 #include <numbers>
 #include <unordered_map>
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "builder/mesh_classifier.hpp"
@@ -174,6 +175,7 @@ NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOp
                                                                           options.full_budget / triangles.size()));
       const double full_stride = double(samples.size()) / double(full_count);
       size_t next_full = 0;
+      double full_weight = 0, misplaced_weight = 0;
       for (size_t s = 0; s < samples.size(); ++s) {
         const auto& [i, weight] = samples[s];
         const auto& t = triangles[i];
@@ -198,14 +200,18 @@ NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOp
         }
         r.full_samples += full;
         r.misplaced_samples += misplaced;
+        if (full) full_weight += weight;
+        if (misplaced) misplaced_weight += weight;
         r.max_deviation = std::max(r.max_deviation, deviation);
         if (deviation > options.tolerance) r.ambiguous_area += weight;
       }
+      r.misplaced_area = full_weight > 0 ? misplaced_weight / full_weight : 0;
       if (!(r.patched_volume > 0))
         refuse("mesh + patches has no positive volume (inside out or flat)");
-      else if (r.misplaced_samples > 0)
+      else if (r.misplaced_samples > 0 && r.misplaced_area > options.max_misplaced_area)
         refuse("its winding number is not 0 outside and 1 inside at " + std::to_string(r.misplaced_samples) +
-               " of " + std::to_string(r.full_samples) + " samples (faces inside its own solid, or flipped)");
+               " of " + std::to_string(r.full_samples) + " samples (faces inside its own solid, or flipped), " +
+               fmt::format("{:.2f}% of their area", 100 * r.misplaced_area));
       else if (r.ambiguous_area > options.max_ambiguous_area)
         refuse("winding number ambiguous on too much of the surface");
       else
@@ -225,11 +231,13 @@ NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOp
     }
     spdlog::info("  mesh '{}': nearly closed {}: {} triangles, edges {} boundary {} non-manifold {} misoriented, "
                  "{} loops ({} patch triangles), w deviation |w_patch| over {} samples: max {:.3f}, {:.2f}% of the area "
-                 "above the tolerance {} (at most {:.2f}%), w not 0 outside / 1 inside at {} of {} samples{}{}",
+                 "above the tolerance {} (at most {:.2f}%), w not 0 outside / 1 inside at {} of {} samples ({:.2f}% of "
+                 "their area, at most {:.2f}%){}{}",
                  info.name, r.accepted ? "accepted" : "refused", info.triangle_count, r.boundary_edges,
                  r.non_manifold_edges, r.misoriented_edges, r.loops, r.patch_triangles, r.samples, r.max_deviation,
                  100 * r.ambiguous_area, options.tolerance, 100 * options.max_ambiguous_area, r.misplaced_samples,
-                 r.full_samples, r.accepted ? "" : ": ", r.reason);
+                 r.full_samples, 100 * r.misplaced_area, 100 * options.max_misplaced_area, r.accepted ? "" : ": ",
+                 r.reason);
     report.meshes.push_back(std::move(r));
   }
   spdlog::info("nearly closed meshes: {} of {} open meshes accepted as solids ({} triangles, {} patch triangles; "

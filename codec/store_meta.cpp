@@ -86,7 +86,8 @@ nlohmann::json StoreMeta::to_json() const {
                              {"max_samples", nearly_closed_max_samples},
                              {"max_patch_triangles", nearly_closed_max_patch_triangles},
                              {"min_full_samples", nearly_closed_min_full_samples},
-                             {"full_budget", nearly_closed_full_budget}};
+                             {"full_budget", nearly_closed_full_budget},
+                             {"max_misplaced_area", nearly_closed_max_misplaced_area}};
   if (shard)
     json["shard"] = {{"index", shard->index}, {"count", shard->count}, {"morton_begin", shard->morton_begin},
                      {"morton_end", shard->morton_end}, {"tiles", shard->tiles}, {"work", shard->work},
@@ -234,6 +235,13 @@ Result<StoreMeta> StoreMeta::from_json(const nlohmann::json& json) {
     meta.nearly_closed_max_patch_triangles = *patch;
     meta.nearly_closed_min_full_samples = *full;
     meta.nearly_closed_full_budget = *budget;
+    if (closing.contains("max_misplaced_area")) {
+      auto misplaced = field<double>(closing, "max_misplaced_area");
+      if (!misplaced) return misplaced.error();
+      if (!(*misplaced >= 0 && *misplaced <= 1))
+        return make_error(ErrorCode::corrupt_data, "meta: nearly_closed max_misplaced_area out of range");
+      meta.nearly_closed_max_misplaced_area = *misplaced;
+    }
   }
 
   // The frame and layout must be constructible, or every lookup would fail later.

@@ -75,6 +75,8 @@ struct StoreMeta {
   uint32_t nearly_closed_max_patch_triangles = 0;
   uint32_t nearly_closed_min_full_samples = 0;
   uint64_t nearly_closed_full_budget = 0;
+  // Absent in stores built before it: 0, any misplaced sample refused (the rule they were built with).
+  double nearly_closed_max_misplaced_area = 0;
   nlohmann::json build_stats = nlohmann::json::object();
   // Set only in a shard store, whose `complete` stays false: it answers for its share alone.
   std::optional<ShardInfo> shard;

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <numbers>
 
 #include "builder/build_job.hpp"
@@ -200,26 +201,57 @@ TEST(NearlyClosed, LargeHoleIsRefused) {
   EXPECT_EQ(exits(render(bowl).tile), 0u);
 }
 
-TEST(NearlyClosed, FlippedFaceIsRefused) {
+// The sphere with the faces whose centroid passes `pick` turned inside out.
+Mesh flipped_where(const std::function<bool(const Vec3&)>& pick, bool only_one) {
   Mesh flipped = kSphere;
   for (auto& t : flipped.triangles) {
-    const Vec3 c = centroid(flipped, t);
-    if (c[2] > 0.5 && c[0] > 0.3 && c[1] > 0.1) {
-      std::swap(t[1], t[2]);
-      break;
-    }
+    if (!pick(centroid(flipped, t))) continue;
+    std::swap(t[1], t[2]);
+    if (only_one) break;
   }
-  Scene scene = scene_of(flipped, false);
+  return flipped;
+}
+
+TEST(NearlyClosed, OneFlippedFaceIsAcceptedAndStaysConservativeThere) {
+  Scene scene = scene_of(flipped_where([](const Vec3& c) { return c[2] > 0.5 && c[0] > 0.3 && c[1] > 0.1; }, true),
+                         false);
   EXPECT_EQ(scene.meshes[0].misoriented_edges, 3u);
   const NearlyClosedReport report = close_nearly_closed_meshes(scene, {});
   // Each misoriented edge is a boundary edge twice over: the patch is the face twice, the right way
   // round, so mesh + patch is the sphere again (a cycle), and |w_patch| ~ 1 near the face. The whole
-  // winding number at the face's own samples is 1 outside and 0 inside: refused.
+  // winding number at the face's own samples is 1 outside and 0 inside: misplaced, but on a share of
+  // the area far below max_misplaced_area, so the sphere is a solid.
   EXPECT_EQ(report.meshes[0].patch_triangles, 2u);
   EXPECT_GT(report.meshes[0].max_deviation, 0.5);
   EXPECT_EQ(report.meshes[0].full_samples, report.meshes[0].samples) << "a small mesh is checked everywhere";
   EXPECT_EQ(report.meshes[0].misplaced_samples, 1u);
+  EXPECT_GT(report.meshes[0].misplaced_area, 0.0);
+  EXPECT_LT(report.meshes[0].misplaced_area, 0.01);
+  EXPECT_TRUE(report.meshes[0].accepted) << report.meshes[0].reason;
+  const Rendered flipped = render(scene);
+  const Rendered sphere = render(scene_of(kSphere, false));
+  // The flipped face's texels see a back face first (no exit there, upper = lower); every other texel
+  // exits as the closed sphere's, and the brute-force reference agrees everywhere.
+  EXPECT_LT(exits(flipped.tile), exits(sphere.tile));
+  EXPECT_GT(exits(flipped.tile), exits(sphere.tile) - 20) << "only the face's few texels lose their exit";
+  for (size_t i = 0; i < flipped.tile.texels.size(); ++i)
+    EXPECT_LE(flipped.tile.texels[i].upper, sphere.tile.texels[i].upper + 1e-6f) << "texel " << i;
+  expect_reference_agrees(flipped);
+
+  NearlyClosedOptions strict;
+  strict.max_misplaced_area = 0;
+  Scene again = scene_of(flipped_where([](const Vec3& c) { return c[2] > 0.5 && c[0] > 0.3 && c[1] > 0.1; }, true),
+                         false);
+  EXPECT_FALSE(close_nearly_closed_meshes(again, strict).meshes[0].accepted) << "0 refuses any misplaced sample";
+}
+
+TEST(NearlyClosed, FlippedCapIsRefused) {
+  // Every face above z = 0.9 flipped: about 5 % of the sphere's area has the wrong winding number.
+  Scene scene = scene_of(flipped_where([](const Vec3& c) { return c[2] > 0.9; }, false), false);
+  const NearlyClosedReport report = close_nearly_closed_meshes(scene, {});
+  EXPECT_GT(report.meshes[0].misplaced_area, 0.01);
   EXPECT_FALSE(report.meshes[0].accepted);
+  EXPECT_EQ(scene.meshes[0].kind, MeshKind::open);
   EXPECT_EQ(exits(render(scene).tile), 0u);
 }
 

@@ -1,6 +1,6 @@
 // StoreMeta::parse on hostile numbers: every count in the meta is an integer that fits its type, or the
 // meta is corrupt_data (fuzz_store_meta regression: a 50-digit resolution was cast from a double,
-// undefined behaviour under UBSan).
+// undefined behaviour under UBSan); the nearly-closed misplaced-area field's default for older stores.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -48,6 +48,34 @@ TEST(StoreMeta, HugeOrFractionalCountsAreCorruptNotCast) {
   EXPECT_FALSE(StoreMeta::parse(meta.dump()).ok());
   meta["scene"]["triangles"] = 18446744073709551615ull;
   EXPECT_TRUE(StoreMeta::parse(meta.dump()).ok());
+}
+
+// The nearly-closed test's misplaced-area budget: stores built before it have no field and reload
+// their scenes with 0 (any misplaced sample refused, the rule they were built with); a value outside
+// [0, 1] is corrupt; a built meta round-trips it.
+TEST(StoreMeta, NearlyClosedMisplacedAreaDefaultsToTheOldRule) {
+  nlohmann::json meta = regression_meta();
+  meta["resolution"] = 1024;
+  ASSERT_FALSE(meta["nearly_closed"].contains("max_misplaced_area"));
+  auto old = StoreMeta::parse(meta.dump());
+  ASSERT_TRUE(old.ok()) << old.error().message;
+  EXPECT_TRUE(old->nearly_closed);
+  EXPECT_EQ(old->nearly_closed_max_misplaced_area, 0.0);
+
+  meta["nearly_closed"]["max_misplaced_area"] = 0.01;
+  auto current = StoreMeta::parse(meta.dump());
+  ASSERT_TRUE(current.ok()) << current.error().message;
+  EXPECT_EQ(current->nearly_closed_max_misplaced_area, 0.01);
+  auto again = StoreMeta::parse(current->to_json().dump());
+  ASSERT_TRUE(again.ok()) << again.error().message;
+  EXPECT_EQ(again->nearly_closed_max_misplaced_area, 0.01);
+
+  for (double bad : {-0.5, 1.5}) {
+    meta["nearly_closed"]["max_misplaced_area"] = bad;
+    auto refused = StoreMeta::parse(meta.dump());
+    ASSERT_FALSE(refused.ok()) << bad;
+    EXPECT_EQ(refused.error().code, ErrorCode::corrupt_data) << bad;
+  }
 }
 
 }  // namespace
