@@ -160,6 +160,7 @@ Result<PreparedBuild> prepare(const BuildConfig& config) {
   LoadOptions load = config.load;
   load.close_nearly_closed = closes_nearly_closed(config);
   load.nearly_closed = config.nearly_closed;
+  load.nearly_closed.threads = config.threads;  // the workers are idle while the scene loads
   auto scene = load_scene(config.scene_path, load, &load_stats);
   if (!scene) return scene.error();
   uint32_t resolution = 0;

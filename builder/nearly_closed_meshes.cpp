@@ -1,10 +1,12 @@
 #include "builder/nearly_closed_meshes.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <functional>
 #include <numbers>
+#include <thread>
 #include <unordered_map>
 
 #include <fmt/format.h>
@@ -115,6 +117,22 @@ MeshPatch patch_boundary_loops(std::vector<Vec3>& vertices, std::span<const std:
   return patch;
 }
 
+namespace {
+
+// f(0) .. f(count - 1) on up to `threads` threads (the calling one included); each index once.
+void for_each_index_in_parallel(size_t count, unsigned threads, const std::function<void(size_t)>& f) {
+  std::atomic<size_t> next{0};
+  auto work = [&] {
+    for (size_t k; (k = next.fetch_add(1, std::memory_order_relaxed)) < count;) f(k);
+  };
+  std::vector<std::thread> helpers;
+  for (unsigned t = 1; t < std::min<size_t>(std::max(threads, 1u), count); ++t) helpers.emplace_back(work);
+  work();
+  for (auto& helper : helpers) helper.join();
+}
+
+}  // namespace
+
 NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOptions& options) {
   NearlyClosedReport report;
   scene.nearly_closed_tested = true;
@@ -175,7 +193,14 @@ NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOp
                                                                           options.full_budget / triangles.size()));
       const double full_stride = double(samples.size()) / double(full_count);
       size_t next_full = 0;
-      double full_weight = 0, misplaced_weight = 0;
+      // The points whose whole winding number is wanted: w_patch now, the mesh's part below, in parallel.
+      struct FullPoint {
+        size_t sample;
+        bool outside;
+        Vec3 p;
+        double w_patch;
+      };
+      std::vector<FullPoint> full_points;
       for (size_t s = 0; s < samples.size(); ++s) {
         const auto& [i, weight] = samples[s];
         const auto& t = triangles[i];
@@ -187,23 +212,31 @@ NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOp
         const bool full = next_full < full_count && s >= size_t(double(next_full) * full_stride);
         if (full) ++next_full;
         double deviation = 0;
-        bool misplaced = false;
         for (double side : {1.0, -1.0}) {
           Vec3 p{};
           for (int k = 0; k < 3; ++k) p[k] = (a[k] + b[k] + c[k]) / 3 + side * eps * n[k] / length;
           const double w_patch = winding_number(scene.vertices, patch.triangles, p);
           deviation = std::max(deviation, std::fabs(w_patch));
-          if (full) {
-            const double w_cycle = winding_number(scene.vertices, triangles, p) + w_patch;
-            misplaced |= std::lround(w_cycle) != (side > 0 ? 0 : 1);
-          }
+          if (full) full_points.push_back({s, side > 0, p, w_patch});
         }
-        r.full_samples += full;
-        r.misplaced_samples += misplaced;
-        if (full) full_weight += weight;
-        if (misplaced) misplaced_weight += weight;
         r.max_deviation = std::max(r.max_deviation, deviation);
         if (deviation > options.tolerance) r.ambiguous_area += weight;
+      }
+      // samples x triangles solid angles: most of a large scan's load time, so on every build thread.
+      std::vector<double> w_mesh(full_points.size());
+      for_each_index_in_parallel(full_points.size(), options.threads, [&](size_t k) {
+        w_mesh[k] = winding_number(scene.vertices, triangles, full_points[k].p);
+      });
+      double full_weight = 0, misplaced_weight = 0;
+      for (size_t k = 0; k < full_points.size(); k += 2) {  // each full sample's outside, then inside point
+        bool misplaced = false;
+        for (size_t side = k; side < k + 2; ++side)
+          misplaced |= std::lround(w_mesh[side] + full_points[side].w_patch) != (full_points[side].outside ? 0 : 1);
+        const double weight = samples[full_points[k].sample].second;
+        ++r.full_samples;
+        r.misplaced_samples += misplaced;
+        full_weight += weight;
+        if (misplaced) misplaced_weight += weight;
       }
       r.misplaced_area = full_weight > 0 ? misplaced_weight / full_weight : 0;
       if (!(r.patched_volume > 0))

@@ -245,6 +245,23 @@ TEST(NearlyClosed, OneFlippedFaceIsAcceptedAndStaysConservativeThere) {
   EXPECT_FALSE(close_nearly_closed_meshes(again, strict).meshes[0].accepted) << "0 refuses any misplaced sample";
 }
 
+TEST(NearlyClosed, ThreadsDoNotChangeTheTest) {
+  const Mesh flipped = flipped_where([](const Vec3& c) { return c[2] > 0.9; }, false);
+  const Mesh holed = without_one(kSphere, [](const Vec3& c) { return c[2] < -0.5 && c[0] > 0.3; });
+  for (const Mesh* mesh : {&flipped, &holed}) {
+    Scene one = scene_of(*mesh, false), three = scene_of(*mesh, false);
+    NearlyClosedOptions parallel;
+    parallel.threads = 3;
+    const MeshClosingReport a = close_nearly_closed_meshes(one, {}).meshes[0];
+    const MeshClosingReport b = close_nearly_closed_meshes(three, parallel).meshes[0];
+    EXPECT_EQ(a.accepted, b.accepted);
+    EXPECT_EQ(a.full_samples, b.full_samples);
+    EXPECT_EQ(a.misplaced_samples, b.misplaced_samples);
+    EXPECT_EQ(a.misplaced_area, b.misplaced_area);
+    EXPECT_EQ(a.max_deviation, b.max_deviation);
+  }
+}
+
 TEST(NearlyClosed, FlippedCapIsRefused) {
   // Every face above z = 0.9 flipped: about 5 % of the sphere's area has the wrong winding number.
   Scene scene = scene_of(flipped_where([](const Vec3& c) { return c[2] > 0.9; }, false), false);
