@@ -66,6 +66,9 @@ def main():
         for mesh in scene.get("heightfield", []):
             cmd += ["--heightfield", mesh]
         print(f"{name} {args.resolution}^2 {receivers}: {' '.join(cmd)}", flush=True)
+        # A store left by a killed run of the same build would be resumed, and a build's byte counts
+        # cover only the tiles it rendered itself: always start from an empty store.
+        shutil.rmtree(args.work, ignore_errors=True)
         start = time.time()
         result = subprocess.run(cmd, capture_output=True, text=True)
         wall = time.time() - start
