@@ -1,12 +1,9 @@
 #include "builder/nearly_closed_meshes.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstddef>
-#include <functional>
 #include <numbers>
-#include <thread>
 #include <unordered_map>
 
 #include <fmt/format.h>
@@ -14,6 +11,7 @@
 
 #include "builder/mesh_classifier.hpp"
 #include "codec/vec3_math.hpp"
+#include "common/parallel_for.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -117,21 +115,6 @@ MeshPatch patch_boundary_loops(std::vector<Vec3>& vertices, std::span<const std:
   return patch;
 }
 
-namespace {
-
-// f(0) .. f(count - 1) on up to `threads` threads (the calling one included); each index once.
-void for_each_index_in_parallel(size_t count, unsigned threads, const std::function<void(size_t)>& f) {
-  std::atomic<size_t> next{0};
-  auto work = [&] {
-    for (size_t k; (k = next.fetch_add(1, std::memory_order_relaxed)) < count;) f(k);
-  };
-  std::vector<std::thread> helpers;
-  for (unsigned t = 1; t < std::min<size_t>(std::max(threads, 1u), count); ++t) helpers.emplace_back(work);
-  work();
-  for (auto& helper : helpers) helper.join();
-}
-
-}  // namespace
 
 NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOptions& options) {
   NearlyClosedReport report;
@@ -224,8 +207,8 @@ NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOp
       }
       // samples x triangles solid angles: most of a large scan's load time, so on every build thread.
       std::vector<double> w_mesh(full_points.size());
-      for_each_index_in_parallel(full_points.size(), options.threads, [&](size_t k) {
-        w_mesh[k] = winding_number(scene.vertices, triangles, full_points[k].p);
+      parallel_for_ranges(options.threads, full_points.size(), [&](size_t begin, size_t end) {
+        for (size_t k = begin; k < end; ++k) w_mesh[k] = winding_number(scene.vertices, triangles, full_points[k].p);
       });
       double full_weight = 0, misplaced_weight = 0;
       for (size_t k = 0; k < full_points.size(); k += 2) {  // each full sample's outside, then inside point

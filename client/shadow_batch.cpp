@@ -17,6 +17,7 @@
 
 #include "codec/morton.hpp"
 #include "client/shadow_map.hpp"
+#include "common/parallel_for.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -56,14 +57,6 @@ void sort_low_bits(BatchItem* items, BatchItem* scratch, size_t n, unsigned bits
   if (from != items) std::copy(from, from + n, items);
 }
 
-// Runs fn(begin, end) over [0, count) on `threads` threads (the caller's included).
-void spawn_parallel_for(unsigned threads, size_t count, const std::function<void(size_t, size_t)>& fn) {
-  const size_t parts = std::max<size_t>(1, std::min<size_t>(threads, count));
-  std::vector<std::thread> pool;
-  for (size_t p = 1; p < parts; ++p) pool.emplace_back([&, p] { fn(count * p / parts, count * (p + 1) / parts); });
-  fn(0, count / parts);
-  for (auto& t : pool) t.join();
-}
 
 }  // namespace
 
@@ -92,7 +85,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   auto parallel_for = [&](size_t count, const std::function<void(size_t, size_t)>& fn) {
     if (options.parallel_for) return options.parallel_for(count, fn);
     unsigned threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
-    spawn_parallel_for(threads, count, fn);
+    parallel_for_ranges(threads, count, fn);
   };
   std::mutex error_mutex;
   std::optional<Error> first_error;
