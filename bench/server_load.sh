@@ -17,7 +17,9 @@
 #      "2 64": one per server thread, then as many keep-alive clients as max_connections: each has
 #      its own I/O thread, query work shares the THREADS query slots), THREADS (server, default 2),
 #      METHOD (GET rows, default raw), BATCH_METHODS (batch rows, default "raw mh dagmh"), UP (scene up
-#      axis, default y).
+#      axis, default y), CHECK_P99_MS (when set: issue 18's load line, checked on the medians: at the
+#      most connections every GET route keeps p99 under this many ms and at least the fewest
+#      connections' req/s; a "keep-alive load:" line says which, and the script exits 1 if not).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # shellcheck source=bench/serve_start.sh
@@ -33,6 +35,7 @@ THREADS=${THREADS:-2}
 METHOD=${METHOD:-raw}
 BATCH_METHODS=${BATCH_METHODS:-raw mh dagmh}
 UP=${UP:-y}
+CHECK_P99_MS=${CHECK_P99_MS:-}
 CLI="$BUILD_DIR/cli/shadowtiles"
 
 require_load_tools "$CLI"
@@ -112,7 +115,7 @@ for round in $(seq "$ROUNDS"); do
     run_wrk "GET /v1/tiles (blob)" "$WORK/tiles.lua" "$c" "$round"
   done
 done
-python3 - "$WORK/wrk_rows" << 'EOF'
+python3 - "$WORK/wrk_rows" "$CHECK_P99_MS" "$WORK/load_line_failed" << 'EOF'
 import collections, statistics, sys
 rows = collections.defaultdict(list)  # (route, connections) -> [(rps, p99 text)]
 for line in open(sys.argv[1]):
@@ -133,6 +136,19 @@ for route in dict.fromkeys(route for route, _ in rows):
         print(f"{route:<28} {c:>3} connections  median {statistics.median(rates):>9.0f} req/s"
               f"  ({statistics.median(rates) / base:.2f})  p99 median {statistics.median(p99s):.2f} ms,"
               f" worst {max(p99s):.2f} ms")
+if sys.argv[2]:
+    limit, parts, held = float(sys.argv[2]), [], True
+    for route in dict.fromkeys(route for route, _ in rows):
+        counts = sorted(c for r, c in rows if r == route)
+        few, most = counts[0], counts[-1]
+        ratio = statistics.median(r for r, _ in rows[route, most]) / statistics.median(r for r, _ in rows[route, few])
+        p99 = statistics.median(ms(p) for _, p in rows[route, most])
+        held &= ratio >= 1.0 and p99 < limit
+        parts.append(f"{route.split(' (')[0]} {most}/{few} connections req/s {ratio:.2f}, p99 {p99:.2f} ms")
+    print(f"keep-alive load: {'; '.join(parts)} (medians of {max(len(v) for v in rows.values())} rounds;"
+          f" line: p99 < {limit:g} ms and ratio >= 1): {'pass' if held else 'FAIL'}")
+    if not held:
+        open(sys.argv[3], "w").close()
 EOF
 
 echo "== binary batches of 100k points (POST application/octet-stream), 12 per method on one keep-alive connection"
@@ -158,3 +174,7 @@ POINT=$(python3 -c 'import json, sys; b = json.load(open(sys.argv[1]))["shadow"]
 echo "== slow clients: $((MAX_CONNECTIONS - 2)) of max_connections $MAX_CONNECTIONS held (half trickle headers, half stall bodies)"
 python3 bench/slow_clients.py 127.0.0.1 "$PORT" $((MAX_CONNECTIONS - 2)) 50 "$POINT"
 curl -sf "$BASE/metrics" | grep -E '^shadowtiles_(points_answered_total|tile_cache_(hits|misses)_total|rejections_total)' || true
+if [ -e "$WORK/load_line_failed" ]; then
+  echo "the keep-alive load line (CHECK_P99_MS=$CHECK_P99_MS) does not hold" >&2
+  exit 1
+fi

@@ -92,9 +92,15 @@ void serve_blob(ServiceState& state, std::shared_ptr<const ShadowMap> held, bool
     return send_error(res, http_error_for(view.error()));
   }
   if (!view->has_value()) return on_absent();
-  auto header = store::check_blob(**view);
-  if (header && expected_method && header->method != *expected_method)
-    header = make_error(ErrorCode::corrupt_data, "the blob holds another method than its key");
+  // A check that passed lately stands (VerifiedBlobs says for how long and why that is safe).
+  auto header = [&]() -> Result<store::BlobHeader> {
+    if (auto recalled = state.verified_blobs.recall(held, db, key, **view)) return *recalled;
+    auto checked = store::check_blob(**view);
+    if (checked && expected_method && checked->method != *expected_method)
+      return make_error(ErrorCode::corrupt_data, "the blob holds another method than its key");
+    if (checked) state.verified_blobs.remember(held, db, key, **view, *checked);
+    return checked;
+  }();
   if (!header) {
     state.metrics.add_corrupt_blob();
     spdlog::error("{}: stored blob fails its checks, not served: {}", what, header.error().message);

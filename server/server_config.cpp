@@ -48,6 +48,7 @@ Status ServerConfig::validate() const {
   if (max_connections > 4096) return bad("max_connections", "must be at most 4096 (one I/O thread each)");
   // LMDB has 126 reader slots per process; the query workers' tile reads need some of them.
   if (max_pinned_sends > 100) return bad("max_pinned_sends", "must be in [0, 100] (LMDB has 126 reader slots)");
+  if (blob_recheck_ms > 3600000) return bad("blob_recheck_ms", "must be in [0, 3600000] (0: check every GET)");
   if (max_batch_cost < 1) return bad("max_batch_cost", "must be at least 1");
   if (query_wait_ms < 1 || query_wait_ms > 600000) return bad("query_wait_ms", "must be in [1, 600000]");
   if (keep_alive_max_count < 1) return bad("keep_alive_max_count", "must be at least 1");
@@ -78,6 +79,7 @@ nlohmann::json ServerConfig::to_json() const {
           {"max_connections", max_connections},
           {"max_connections_per_address", max_connections_per_address},
           {"max_pinned_sends", max_pinned_sends},
+          {"blob_recheck_ms", blob_recheck_ms},
           {"max_batch_cost", max_batch_cost},
           {"query_wait_ms", query_wait_ms},
           {"keep_alive_max_count", keep_alive_max_count},
@@ -134,6 +136,7 @@ Result<ServerConfig> ServerConfig::from_json(const nlohmann::json& json, ServerC
       {"max_connections_per_address",
        [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.max_connections_per_address); }},
       {"max_pinned_sends", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.max_pinned_sends); }},
+      {"blob_recheck_ms", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.blob_recheck_ms); }},
       {"max_batch_cost", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU64, config.max_batch_cost); }},
       {"query_wait_ms", [&](auto& v, auto& k) { return read_uint(v, k, 0, kU32, config.query_wait_ms); }},
       {"keep_alive_max_count",

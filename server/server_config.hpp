@@ -37,6 +37,7 @@ struct ServerConfig {
   unsigned max_connections = 64;         // connections served at once (one I/O thread each); beyond: 503
   unsigned max_connections_per_address = 0;  // 0: no per-address cap; else beyond it: 503
   unsigned max_pinned_sends = 48;        // blob sends from the store's map at once (LMDB reader each); beyond: copy
+  unsigned blob_recheck_ms = 1000;       // a served blob's passed check stands this long; 0: check every GET
   uint64_t max_batch_cost = 16'000'000;  // points x kernel^2 of one batch; beyond: 413
   unsigned query_wait_ms = 2000;         // longest wait for a query slot; beyond: 503 busy
   unsigned keep_alive_max_count = 1000;  // requests per keep-alive connection (nginx's default)

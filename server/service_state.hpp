@@ -20,6 +20,7 @@
 #include "server/render_pool.hpp"
 #include "server/tile_summary_cache.hpp"
 #include "server/server_config.hpp"
+#include "server/verified_blobs.hpp"
 
 namespace shadowtiles::server {
 
@@ -30,7 +31,11 @@ struct ServiceState {
         pool(config.threads),
         slots(config.threads),
         render_cache(size_t(config.render_cache_bytes)),
-        render_pool(config.render_threads, config.render_queue) {}
+        render_pool(config.render_threads, config.render_queue),
+        verified_blobs(std::chrono::milliseconds(config.blob_recheck_ms), kVerifiedBlobEntries) {}
+
+  // ~100 bytes each: enough for every tile a server streams hot, small beside the tile cache.
+  static constexpr size_t kVerifiedBlobEntries = 65536;
 
   std::shared_ptr<const ShadowMap> map() const { return map_.load(std::memory_order_acquire); }
   void publish(std::shared_ptr<const ShadowMap> map) { map_.store(std::move(map), std::memory_order_release); }
@@ -42,6 +47,7 @@ struct ServiceState {
   QuerySlots slots;                // `threads` query workers; see take_query_slot
   TileSummaryCache render_cache;   // previews and tile sizes for /v1/render
   RenderPool render_pool;          // /v1/render only, never the query workers (destroyed first)
+  VerifiedBlobs verified_blobs;    // blobs whose checks passed lately (tile and skip-list GETs)
 
  private:
   std::atomic<std::shared_ptr<const ShadowMap>> map_;

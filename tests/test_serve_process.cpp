@@ -26,6 +26,7 @@ TEST(ServerConfig, StrictParsingAndOverrides) {
                           json{{"threads", 0}}, json{{"threads", 2.5}}, json{{"max_pcf", 4}}, json{{"max_pcf", 99}},
                           json{{"cors_origins", "https://a.example"}}, json{{"cors_origins", {"*"}}},
                           json{{"read_timeout_s", 0}}, json{{"max_connections", 1}}, json{{"max_pinned_sends", 101}},
+                          json{{"blob_recheck_ms", 3600001}},
                           json::array()}) {
     auto parsed = server::ServerConfig::from_json(bad);
     EXPECT_FALSE(parsed.ok()) << bad.dump();
