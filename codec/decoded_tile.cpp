@@ -16,6 +16,15 @@ class RawDecodedTile final : public DecodedTile {
   uint32_t size() const override { return view_.size(); }
   float value(uint32_t u, uint32_t v, unsigned) const override { return view_.value(u, v); }
   size_t memory_bytes() const override { return view_.memory_bytes(); }
+  // Not the base class's loop of virtual lit() calls: a raw PCF box is a few array reads.
+  uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const override {
+    return view_.lit_count(u0, v0, kw, kh, threshold);
+  }
+  bool lit(uint32_t u, uint32_t v, float threshold, unsigned) const override { return threshold <= view_.value(u, v); }
+  Sample sample(uint32_t u, uint32_t v, float threshold, unsigned) const override {
+    const float x = view_.value(u, v);
+    return {x, threshold <= x};
+  }
   void lit_sorted(std::span<const TexelQuery> queries, unsigned, uint8_t* lit) const override {
     for (size_t i = 0; i < queries.size(); ++i) lit[i] = queries[i].threshold <= view_.value(queries[i].u, queries[i].v);
   }

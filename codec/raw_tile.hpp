@@ -35,6 +35,14 @@ class RawTileView {
   static Result<RawTileView> parse(std::span<const uint8_t> payload);
   uint32_t size() const { return size_; }
   float value(uint32_t u, uint32_t v) const { return values_[size_t(v) * size_ + u]; }
+  // Texels of the kw x kh box at (u0, v0) (inside the tile) with threshold <= value: PCF reads the
+  // box's rows straight from the array.
+  uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const {
+    uint32_t lit = 0;
+    for (const float* row = &values_[size_t(v0) * size_ + u0]; kh > 0; --kh, row += size_)
+      for (uint32_t i = 0; i < kw; ++i) lit += threshold <= row[i];
+    return lit;
+  }
   size_t memory_bytes() const { return values_.size() * sizeof(float); }
 
  private:

@@ -39,6 +39,29 @@ TEST(RawTile, RoundTripWithHeader) {
     for (uint32_t u = 0; u < 8; ++u) EXPECT_EQ(view->value(u, v), values[v * 8 + u]);
 }
 
+// PCF boxes read straight from the array count what comparing every texel's value counts, for
+// every box of a 16x16 tile with misses (1) among the values.
+TEST(RawTile, PcfCountsEqualPerTexelComparisons) {
+  const uint32_t size = 16;
+  std::vector<float> values = ramp(size);
+  for (size_t i = 0; i < values.size(); i += 7) values[i] = 1.0f;  // misses are stored as 1
+  auto tile = decode_raw_tile(encode_raw_tile(size, values));
+  ASSERT_TRUE(tile.ok()) << tile.error().message;
+  for (float threshold : {0.0f, 0.3f, 0.5f, 0.97f, 2.0f})
+    for (uint32_t v0 = 0; v0 < size; ++v0)
+      for (uint32_t u0 = 0; u0 < size; ++u0)
+        for (uint32_t k = 1; u0 + k <= size && v0 + k <= size && k <= 7; k += 2) {
+          uint32_t expected = 0;
+          for (uint32_t v = v0; v < v0 + k; ++v)
+            for (uint32_t u = u0; u < u0 + k; ++u) expected += threshold <= values[v * size + u];
+          ASSERT_EQ((*tile)->lit_count(u0, v0, k, k, threshold), expected) << u0 << "," << v0 << " k " << k;
+          ASSERT_EQ((*tile)->lit(u0, v0, threshold), threshold <= values[v0 * size + u0]);
+          const auto sample = (*tile)->sample(u0, v0, threshold);
+          ASSERT_EQ(sample.value, values[v0 * size + u0]);
+          ASSERT_EQ(sample.lit, threshold <= sample.value);
+        }
+}
+
 TEST(RawTile, NanValueIsCorrupt) {
   for (float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
                     -std::numeric_limits<float>::infinity()}) {
