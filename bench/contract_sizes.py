@@ -41,11 +41,12 @@ def res_label(r):
     return f"{r // 1024}K" if r % 1024 == 0 else str(r)
 
 
-def kept_rows(previous_block, resolutions):
-    """What the report's previous block holds for resolutions not in these runs (their runs' JSON is not
-    in the repository, so a run at one resolution must not erase another's figures), verbatim: size-table
-    rows, error-table rows, the DAG-MH > CPVS lines, and where those figures came from."""
-    labels = {res_label(r) for r in resolutions}
+def kept_rows(previous_block, runs):
+    """What the report's previous block holds for rows not in these runs (their runs' JSON is not in the
+    repository, so a run must not erase other figures), verbatim: size-table and error-table rows of every
+    (scene, resolution, contract) not rerun, the DAG-MH > CPVS lines of resolutions not rerun, and where
+    those figures came from. `runs`: the (scene, resolution label, contract) triples of these runs."""
+    labels = {res for _, res, _ in runs}
     kept = {"sizes": [], "errors": [], "over_cpvs": [], "sources": "", "receiver_counts": []}
     for line in previous_block.splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
@@ -60,11 +61,21 @@ def kept_rows(previous_block, resolutions):
                 # The runs named there: this block's own and, nested, those of rows it kept.
                 kept["sources"] = re.findall(r"\((out/[^()]*?)\)", line)
             continue
-        if len(cells) == 13 and cells[2] not in labels:
+        if len(cells) == 13 and (cells[0], cells[2], cells[3]) not in runs:
             kept["sizes"].append(line)
-        elif len(cells) == 4 + len(METHODS) and cells[1] not in labels:
+        elif len(cells) == 4 + len(METHODS) and (cells[0], cells[1], cells[2]) not in runs:
             kept["errors"].append(line)
     return kept
+
+
+def res_value(label):
+    return int(label[:-1]) * 1024 if label.endswith("K") else int(label)
+
+
+def row_order(line, res_cell, contract_cell):
+    """Sort key of a table row (kept or new): resolution, scene, contract."""
+    cells = [c.strip() for c in line.strip().strip("|").split("|")]
+    return (res_value(cells[res_cell]), cells[0], cells[contract_cell])
 
 
 def section(entries, sources, commits, build_time, kept=None):
@@ -77,31 +88,38 @@ def section(entries, sources, commits, build_time, kept=None):
              "contract is checked by `shadowtiles verify` (brute-force caps; test_receiver_contracts, "
              "test_receiver_contracts_long at 4096^2), not by this table. wall/rays = build wall time / dual-depth ray-casting wall time "
              "of a build of MH, MMH and DAG-MH in one run (issue 14's build-time figure; `*`: of the six-method build, "
-             "where no such run is given). Rows of resolutions not in these runs are kept from the report's previous "
-             "regeneration" + (f" ({kept['sources']})" if kept["sizes"] and kept["sources"] else "") + ".", "",
+             "where no such run is given). Rows (scene, resolution, contract) not in these runs are kept from the report's "
+             "previous regeneration" + (f" ({kept['sources']})" if kept["sizes"] and kept["sources"] else "") + ".", "",
              "| scene | kind | res | contract | raw | MH | MMH | DAG-MH | CPVS | SST | DAG-MH/CPVS | MMH/MH | wall/rays |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    lines += kept["sizes"]
-    for e in sorted(entries, key=lambda e: (e["resolution"], e["scene"], e.get("receivers", "anywhere"))):
+    size_rows = list(kept["sizes"])
+    for e in entries:
         b = e["stats"]["bytes_by_method"]
         ratio = lambda x, y: f"{b[x] / b[y]:.2f}" if b.get(x) and b.get(y) else "-"
         wall = e["stats"].get("wall_over_ray_casting")
         timed = build_time.get((e["scene"], e["resolution"], e.get("receivers", "anywhere")))
         wall_text = f"{timed['stats']['wall_over_ray_casting']:.2f}" if timed else (f"{wall:.1f}*" if wall else "-")
-        lines.append("| " + " | ".join([e["scene"], CLOSED_OR_TERRAIN.get(e["scene"], "open"), res_label(e["resolution"]),
+        size_rows.append("| " + " | ".join([e["scene"], CLOSED_OR_TERRAIN.get(e["scene"], "open"), res_label(e["resolution"]),
                                          e.get("receivers", "anywhere")] +
                                         [human(b[m]) if m in b else "-" for m in METHODS] +
                                         [ratio("dagmh", "cpvs"), ratio("mmh", "mh"),
                                          wall_text]) + " |")
-    # The issue's target, stated from the figures rather than by hand.
+    lines += sorted(size_rows, key=lambda line: row_order(line, 2, 3))
+    # The issue's target, stated from the figures rather than by hand (kept rows of a rerun resolution
+    # count too, from their table cells).
     lines += [x for line in kept["over_cpvs"] for x in ("", line)]
+    kept_cells = [[c.strip() for c in line.strip().strip("|").split("|")] for line in kept["sizes"]]
     for res in sorted({e["resolution"] for e in entries}):
-        over = [f"{e['scene']} {e['stats']['bytes_by_method']['dagmh'] / e['stats']['bytes_by_method']['cpvs']:.2f}"
-                for e in entries if e["resolution"] == res and e.get("receivers") == "surfaces"
-                and CLOSED_OR_TERRAIN.get(e["scene"]) is None
-                and e["stats"]["bytes_by_method"].get("dagmh", 0) > e["stats"]["bytes_by_method"].get("cpvs", 1 << 62)]
-        measured = sorted({e["scene"] for e in entries if e["resolution"] == res and e.get("receivers") == "surfaces"
-                           and CLOSED_OR_TERRAIN.get(e["scene"]) is None})
+        found = {}  # open scene under `surfaces` -> DAG-MH/CPVS text when larger, else None
+        for e in entries:
+            b = e["stats"]["bytes_by_method"]
+            if e["resolution"] == res and e.get("receivers") == "surfaces" and CLOSED_OR_TERRAIN.get(e["scene"]) is None:
+                found[e["scene"]] = f"{b['dagmh'] / b['cpvs']:.2f}" if b.get("dagmh", 0) > b.get("cpvs", 1 << 62) else None
+        for c in kept_cells:
+            if c[2] == res_label(res) and c[3] == "surfaces" and c[1] == "open":
+                found[c[0]] = c[10] if c[10] != "-" and float(c[10]) > 1 else None
+        over = [f"{scene} {ratio}" for scene, ratio in sorted(found.items()) if ratio]
+        measured = sorted(found)
         lines += ["", f"- {res_label(res)}, `surfaces`, open scenes where DAG-MH is larger than CPVS: "
                   + ((", ".join(over) if over else "none") + f" (of {', '.join(measured)})" if measured
                      else "no open scene built at this resolution yet")]
@@ -121,7 +139,7 @@ def error_table(entries, kept_rows=(), kept_counts=()):
              "2 texels, seed 1); a lossless method (MH, MMH, DAG-MH, SST) may never be false lit more often than raw.", "",
              "| scene | res | contract | " + " | ".join(m.upper() if m != "dagmh" else "DAG-MH" for m in METHODS) +
              " | lossless f-lit <= raw |", "|---|---|---|" + "---|" * (len(METHODS) + 1)]
-    lines += list(kept_rows)  # other resolutions, from the previous regeneration
+    table = list(kept_rows)  # rows not rerun, from the previous regeneration
     worse = [f"{c[0]} {c[1]} {c[2]} ({c[-1]})" for c in
              ([x.strip() for x in row.strip().strip("|").split("|")] for row in kept_rows) if c[-1].startswith("no")]
 
@@ -132,9 +150,10 @@ def error_table(entries, kept_rows=(), kept_counts=()):
         over = [m for m in LOSSLESS if m in acc and raw_lit is not None and acc[m]["false_lit"] > raw_lit]
         worse += [f"{e['scene']} {res_label(e['resolution'])} {e.get('receivers', 'anywhere')} {m} "
                   f"{acc[m]['false_lit']} vs raw {raw_lit}" for m in over]
-        lines.append("| " + " | ".join([e["scene"], res_label(e["resolution"]), e.get("receivers", "anywhere")] +
+        table.append("| " + " | ".join([e["scene"], res_label(e["resolution"]), e.get("receivers", "anywhere")] +
                                       [cell(m) for m in METHODS] +
                                       ["-" if raw_lit is None else ("no: " + ", ".join(over) if over else "yes")]) + " |")
+    lines += sorted(table, key=lambda line: row_order(line, 1, 2))
     lines += ["", "- Lossless methods false lit more often than raw: " + ("; ".join(worse) if worse else "none")]
     return lines
 
@@ -165,7 +184,8 @@ def main():
         text = f.read()
     pattern = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END), re.S)
     previous = pattern.search(text)
-    kept = kept_rows(previous.group(0), {e["resolution"] for e in entries.values()}) if previous else None
+    kept = kept_rows(previous.group(0), {(scene, res_label(res), contract) for scene, res, contract in entries}) \
+        if previous else None
     if kept:  # the kept rows' runs: the previous block's, less these runs (a rerun of the same files)
         kept["sources"] = "; ".join(part for part in kept["sources"]
                                     if not {x.strip() for x in part.split(";")[0].split(",")} <= set(args.runs))

@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
-"""bench/contract_sizes.py keeps what it did not rerun: a run at one resolution regenerates that
-resolution's rows and keeps every other resolution's size rows, error rows and DAG-MH > CPVS lines
-verbatim (their runs' JSON is not in the repository), names their sources, and a rerun of the same
-files changes nothing. Usage: contract_sizes_test.py PROJECT_SOURCE_DIR"""
+"""bench/contract_sizes.py keeps what it did not rerun: a run regenerates its own (scene, resolution,
+contract) rows and keeps every other row verbatim (their runs' JSON is not in the repository): other
+resolutions' size rows, error rows and DAG-MH > CPVS lines, and other scenes' rows at a rerun
+resolution, which also count in that resolution's DAG-MH > CPVS line. It names their sources, and a
+rerun of the same files changes nothing. Usage: contract_sizes_test.py PROJECT_SOURCE_DIR"""
 import json
 import os
 import subprocess
@@ -12,9 +13,9 @@ import tempfile
 script = os.path.join(sys.argv[1], "bench", "contract_sizes.py")
 
 
-def run_file(path, resolution, commit, dagmh):
+def run_file(path, resolution, commit, dagmh, scene_names=("fzk_haus", "nefertiti")):
     scenes = []
-    for scene in ("fzk_haus", "nefertiti"):
+    for scene in scene_names:
         for contract in ("anywhere", "surfaces"):
             b = {"raw": 1_000_000, "mh": 9000, "mmh": 8000, "dagmh": dagmh, "cpvs": 5000, "sst": 7000}
             acc = {m: {"false_lit": 3, "false_shadowed": 9} for m in b}
@@ -56,4 +57,21 @@ with tempfile.TemporaryDirectory() as tmp:
 
     third = regenerate(md, "out/sizes-64k.json")
     assert third == second, "a rerun of the same files changed the report"
-print("contract_sizes.py keeps other resolutions: ok")
+
+    # One scene rerun at 64K: its rows change, nefertiti's 64K rows and every 4K row stay, and the
+    # 64K DAG-MH > CPVS line now names the rerun scene.
+    run_file("out/fzk-64k.json", 65536, "cccc", dagmh=5500, scene_names=("fzk_haus",))
+    fourth = regenerate(md, "out/fzk-64k.json")
+    nefertiti_64k = [l for l in second.splitlines() if l.startswith("| nefertiti |") and " | 64K | " in l]
+    assert len(nefertiti_64k) == 4, nefertiti_64k
+    for row in rows_4k + nefertiti_64k:
+        assert row in fourth, f"row lost or changed: {row}"
+    fzk_64k = [l for l in fourth.splitlines() if l.startswith("| fzk_haus |") and " | 64K | " in l]
+    assert len(fzk_64k) == 4 and all(l not in second for l in fzk_64k if l.count("|") == 14), fzk_64k
+    assert "- 64K, `surfaces`, open scenes where DAG-MH is larger than CPVS: fzk_haus 1.10 (of fzk_haus)" in fourth, fourth
+    assert len([l for l in fourth.splitlines() if " | 64K | " in l]) == 8, fourth
+    table = [l for l in fourth.splitlines() if l.count("|") == 14 and l.startswith("| ") and "---" not in l
+             and not l.startswith("| scene")]
+    order = [(int(l.split("|")[3].strip()[:-1]), l.split("|")[1].strip()) for l in table]
+    assert order == sorted(order), f"size rows out of (resolution, scene) order: {order}"
+print("contract_sizes.py keeps the rows it did not rerun: ok")
