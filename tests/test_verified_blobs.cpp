@@ -114,6 +114,27 @@ class DamagedWhileServedTest : public ::testing::Test {
     ASSERT_TRUE(file.good());
   }
 
+  // Served with blob_recheck_ms = recheck_ms: the tile goes out whole, then the file is damaged
+  // under the server, and `wait` later the tile is a 500, never its bytes.
+  void expect_damage_refused(unsigned recheck_ms, std::chrono::milliseconds wait) {
+    server::ServerConfig config = test_config();
+    config.blob_recheck_ms = recheck_ms;
+    RunningServer running(config, &store_);
+    auto cli = running.client();
+    auto first = cli.Get("/v1/tiles/raw/2/1/1");
+    ASSERT_TRUE(first);
+    ASSERT_EQ(first->status, 200);
+    EXPECT_EQ(first->body, std::string(blob_.begin(), blob_.end()));
+    damage_the_file();
+    std::this_thread::sleep_for(wait);
+    auto later = cli.Get("/v1/tiles/raw/2/1/1");
+    expect_json_error(later, 500, "damaged tile once its check is due");
+    EXPECT_EQ(later->body.find("STB1"), std::string::npos) << "never the bytes";
+    auto metrics = cli.Get("/metrics");
+    ASSERT_TRUE(metrics);
+    EXPECT_GE(metric(metrics->body, "shadowtiles_corrupt_blobs_total"), 1u);
+  }
+
   TempDir dir_;
   std::filesystem::path store_;
   std::vector<uint8_t> blob_;
@@ -121,35 +142,10 @@ class DamagedWhileServedTest : public ::testing::Test {
 };
 
 TEST_F(DamagedWhileServedTest, DamageIsRefusedOnceTheStandingCheckRunsOut) {
-  server::ServerConfig config = test_config();
-  config.blob_recheck_ms = 300;
-  RunningServer running(config, &store_);
-  auto cli = running.client();
-  auto first = cli.Get("/v1/tiles/raw/2/1/1");
-  ASSERT_TRUE(first);
-  ASSERT_EQ(first->status, 200);
-  EXPECT_EQ(first->body, std::string(blob_.begin(), blob_.end()));
-  damage_the_file();
-  std::this_thread::sleep_for(400ms);
-  auto later = cli.Get("/v1/tiles/raw/2/1/1");
-  expect_json_error(later, 500, "damaged tile after the standing check ran out");
-  EXPECT_EQ(later->body.find("STB1"), std::string::npos) << "never the bytes";
-  auto metrics = cli.Get("/metrics");
-  ASSERT_TRUE(metrics);
-  EXPECT_GE(metric(metrics->body, "shadowtiles_corrupt_blobs_total"), 1u);
+  expect_damage_refused(300, 400ms);
 }
 
-TEST_F(DamagedWhileServedTest, ZeroRecheckRefusesDamageAtOnce) {
-  server::ServerConfig config = test_config();
-  config.blob_recheck_ms = 0;
-  RunningServer running(config, &store_);
-  auto cli = running.client();
-  auto first = cli.Get("/v1/tiles/raw/2/1/1");
-  ASSERT_TRUE(first);
-  ASSERT_EQ(first->status, 200);
-  damage_the_file();
-  expect_json_error(cli.Get("/v1/tiles/raw/2/1/1"), 500, "damaged tile, checked on every GET");
-}
+TEST_F(DamagedWhileServedTest, ZeroRecheckRefusesDamageAtOnce) { expect_damage_refused(0, 0ms); }
 
 }  // namespace
 }  // namespace shadowtiles
