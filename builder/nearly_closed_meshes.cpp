@@ -115,7 +115,6 @@ MeshPatch patch_boundary_loops(std::vector<Vec3>& vertices, std::span<const std:
   return patch;
 }
 
-
 NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOptions& options) {
   NearlyClosedReport report;
   scene.nearly_closed_tested = true;

@@ -57,7 +57,6 @@ void sort_low_bits(BatchItem* items, BatchItem* scratch, size_t n, unsigned bits
   if (from != items) std::copy(from, from + n, items);
 }
 
-
 }  // namespace
 
 Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method, const BatchOptions& options,
