@@ -29,39 +29,34 @@ Result<std::vector<uint8_t>> encode_mh(const MhHierarchy& h, const MhEncodeOptio
   if (Status s = check_structure(h); !s) return s.error();
   const unsigned L = h.levels;
 
-  // Reachable blocks in depth-first pre-order (child 0's subtree first): a node's subtree is one
-  // contiguous run, so the last levels of a walk, and every texel of a PCF box under one small
-  // ancestor, fall in a few adjacent cache lines instead of one line per level (breadth-first put
-  // each level of a deep tree megabytes apart). Built as the reverse of a post-order that visits
-  // children last to first: for a tree that is the pre-order, and for merged (shared) blocks it is
-  // still a topological order, so every reference points forward, as the format requires.
+  // Reachable blocks in breadth-first order, then their subtree heights (children come later in
+  // breadth-first order of a tree, but not necessarily with shared blocks: memoised recursion,
+  // depth bounded by the levels).
   std::vector<uint32_t> order;
+  std::vector<int32_t> height(h.block_count(), -1);
   uint64_t references = 0;
   if (h.root_mask != 0) {
     std::vector<uint8_t> seen(h.block_count(), 0);
-    struct Frame {
-      uint32_t block;
-      unsigned next;  // children left to visit, counting down
-    };
-    std::vector<Frame> stack;
-    stack.push_back({h.root_block, F::branch_children(h.block_mask[h.root_block])});
+    order.push_back(h.root_block);
     seen[h.root_block] = 1;
     references = 1;
-    while (!stack.empty()) {
-      Frame& top = stack.back();
-      if (top.next == 0) {
-        order.push_back(top.block);
-        stack.pop_back();
-        continue;
-      }
-      const uint32_t c = h.child_block[h.block_first_child[top.block] + --top.next];
-      ++references;
-      if (!seen[c]) {
-        seen[c] = 1;
-        stack.push_back({c, F::branch_children(h.block_mask[c])});
+    for (size_t k = 0; k < order.size(); ++k) {
+      const uint32_t b = order[k];
+      for (unsigned r = 0; r < F::branch_children(h.block_mask[b]); ++r) {
+        const uint32_t c = h.child_block[h.block_first_child[b] + r];
+        ++references;
+        if (!seen[c]) seen[c] = 1, order.push_back(c);
       }
     }
-    std::reverse(order.begin(), order.end());
+    auto compute = [&](auto&& self, uint32_t b) -> int32_t {
+      if (height[b] >= 0) return height[b];
+      int32_t hb = 0;
+      for (unsigned r = 0; r < F::branch_children(h.block_mask[b]); ++r)
+        hb = std::max(hb, 1 + self(self, h.child_block[h.block_first_child[b] + r]));
+      return height[b] = hb;
+    };
+    compute(compute, h.root_block);
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return height[a] > height[b]; });
   }
 
   uint64_t records = 0, values = 0;

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <tuple>
 
@@ -13,7 +12,6 @@
 #include "builder/mh_synthetic.hpp"
 #include "builder/mh_verify.hpp"
 #include "codec/mh_decoder.hpp"
-#include "codec/mh_format.hpp"
 #include "tests/mh_reference_intervals.hpp"
 #include "tests/parsed_payload.hpp"
 
@@ -142,46 +140,6 @@ TEST(MhEncode, ReferenceSizeCountsNodeTypes) {
   EXPECT_EQ(e.view.stats().inner_nodes, c.inner);
   EXPECT_EQ(e.view.stats().empty_nodes, c.empty);
   EXPECT_EQ(e.view.stats().leaf_nodes, c.leaves);
-}
-
-// Blocks are laid out depth-first: a node's block is followed at once by child 0's subtree, then
-// child 1's, ..., so every subtree is one contiguous run of the stream (what keeps a deep walk's last
-// levels and a PCF box's texels in adjacent cache lines).
-TEST(MhEncode, EverySubtreeIsOneContiguousRunInDepthFirstOrder) {
-  namespace F = mh_format;
-  for (MhSyntheticKind kind : {MhSyntheticKind::random_intervals, MhSyntheticKind::boxes_and_misses}) {
-    const TileIntervals tile = make_synthetic_tile(kind, 64, 5);
-    Encoded e = encode_and_parse(tile, MhConstruction::bottom_up);
-    ASSERT_FALSE(e.bytes.empty());
-    const uint8_t* head = e.bytes.data();
-    const unsigned W = head[F::kOffOffsetWidth];
-    ASSERT_EQ(head[F::kOffSkipLevel], 0u);
-    ASSERT_NE(head[F::kOffRootMask], 0u);
-    const uint8_t* stream = head + F::kHeaderBytes;
-    uint32_t stream_bytes = 0, root_block = 0;
-    std::memcpy(&stream_bytes, head + F::kOffStreamBytes, 4);
-    std::memcpy(&root_block, head + F::kOffRootBlock, 4);
-    EXPECT_EQ(root_block, 0u);
-    // Returns where the subtree whose block starts at `offset` ends; expects each child's block
-    // exactly where the previous sibling's subtree ended.
-    uint64_t blocks = 0;
-    auto subtree_end = [&](auto&& self, uint32_t offset, uint8_t mask) -> uint64_t {
-      ++blocks;
-      uint64_t end = offset + F::block_bytes(mask, W);
-      const uint8_t* record = stream + offset;
-      for (unsigned r = 0; r < F::branch_children(mask); ++r, record += F::record_bytes(W)) {
-        uint32_t child = 0;
-        std::memcpy(&child, record + 1, W);
-        EXPECT_EQ(child, end) << "child block not right after the previous subtree";
-        if (child != end) return end;
-        end = self(self, child, record[0]);
-      }
-      return end;
-    };
-    EXPECT_EQ(subtree_end(subtree_end, 0, head[F::kOffRootMask]), stream_bytes);
-    EXPECT_EQ(blocks, e.view.stats().blocks);
-    EXPECT_GT(blocks, 100u);
-  }
 }
 
 }  // namespace
