@@ -8,6 +8,9 @@
 // nearly closed meshes are not loaded as solids here, so a receiver their patches would wrongly enclose
 // still shows as a leak.
 // Used by bench/build_sizes.py --accuracy for the two-contract size and leak table.
+// --list-worse names every receiver a method lights where raw and the truth shadow it (a leak beyond
+// raw's): position, mesh, light-space texel and depth, raw's and the method's stored values, so a
+// leak found on a 65536^2 run can be traced without rebuilding it.
 // Exit codes: 0, 1 (failure), 2 (bad arguments), 4 (store or scene unreadable).
 #include <algorithm>
 #include <cmath>
@@ -37,7 +40,37 @@ struct AccuracyFlags {
   uint64_t seed = 1;
   size_t cache_mib = 4096;
   bool json = false;
+  bool list_worse = false;
 };
+
+// The receivers `answers` lights where raw (and the truth) shadow them.
+nlohmann::json worse_receivers(const ShadowMap& map, const Scene& scene, store::Method method,
+                               std::span<const Receiver> receivers, std::span<const uint8_t> truths,
+                               std::span<const uint8_t> raw_answers, std::span<const uint8_t> answers) {
+  nlohmann::json list = nlohmann::json::array();
+  const store::Method raw = store::Method::raw;
+  for (size_t i = 0; i < receivers.size() && i < answers.size() && i < raw_answers.size(); ++i) {
+    if (!answers[i] || raw_answers[i] || truths[i]) continue;
+    const Receiver& r = receivers[i];
+    const LightSpacePoint p = map.frame().to_light(r.position);
+    const uint32_t u = uint32_t(std::clamp(p.u, 0.0, double(map.layout().resolution() - 1)));
+    const uint32_t v = uint32_t(std::clamp(p.v, 0.0, double(map.layout().resolution() - 1)));
+    auto raw_value = map.texel_value(raw, u, v);
+    auto value = map.texel_value(method, u, v);
+    const uint32_t mesh = r.triangle < scene.triangle_mesh.size() ? scene.triangle_mesh[r.triangle] : 0;
+    list.push_back({{"position", {r.position[0], r.position[1], r.position[2]}},
+                    {"normal", {r.normal[0], r.normal[1], r.normal[2]}},
+                    {"triangle", r.triangle},
+                    {"mesh", mesh < scene.meshes.size() ? scene.meshes[mesh].name : std::string()},
+                    {"mesh_kind", mesh < scene.meshes.size() ? mesh_kind_name(scene.meshes[mesh].kind) : ""},
+                    {"texel", {u, v}},
+                    {"light_uv", {p.u, p.v}},
+                    {"depth", p.depth},
+                    {"raw_value", raw_value ? double(*raw_value) : std::nan("")},
+                    {"value", value ? double(*value) : std::nan("")}});
+  }
+  return list;
+}
 
 int run(const AccuracyFlags& flags) {
   ShadowMap::Options options;
@@ -94,8 +127,9 @@ int run(const AccuracyFlags& flags) {
                         {"contract", receiver_contract_name(meta.receivers)}, {"methods", nlohmann::json::object()}};
   for (store::Method method : methods) {
     const bool is_raw = store::method_properties(method).reference;
+    std::vector<uint8_t> answers;
     auto acc = point_accuracy(**map, method, receivers, truths, is_raw ? std::span<const uint8_t>{} : raw_answers,
-                              is_raw ? &raw_answers : nullptr);
+                              is_raw ? &raw_answers : &answers);
     if (!acc) {
       spdlog::error("{}: {}", store::method_name(method), acc.error().message);
       return exit_code_for(acc.error());
@@ -104,6 +138,12 @@ int run(const AccuracyFlags& flags) {
         {"false_lit", acc->false_lit},           {"false_shadowed", acc->false_shadowed},
         {"truth_lit", acc->truth_lit},           {"differs_from_raw", acc->differs_from_raw},
         {"worse_than_raw", acc->worse_than_raw}, {"outside_map", acc->outside_map}};
+    if (flags.list_worse && !is_raw && !raw_answers.empty()) {
+      nlohmann::json worse = worse_receivers(**map, *scene, method, receivers, truths, raw_answers, answers);
+      if (!flags.json)
+        for (const nlohmann::json& w : worse) std::printf("%s worse than raw: %s\n", store::method_name(method), w.dump().c_str());
+      out["methods"][store::method_name(method)]["worse"] = std::move(worse);
+    }
     if (!flags.json)
       std::printf("%-6s false lit %6llu  false shadowed %6llu  (of %zu receivers; differs from raw %llu)\n",
                   store::method_name(method), static_cast<unsigned long long>(acc->false_lit),
@@ -127,6 +167,8 @@ void add_accuracy_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--seed", flags->seed, "Receiver sampling seed (the bench's default)")->capture_default_str();
   cmd->add_option("--cache-mib", flags->cache_mib, "Decoded tile cache")->capture_default_str();
   cmd->add_flag("--json", flags->json, "Print JSON");
+  cmd->add_flag("--list-worse", flags->list_worse,
+                "Name every receiver a method lights where raw and the truth shadow it (needs raw stored)");
   cmd->callback([flags, &exit_code] { exit_code = run(*flags); });
 }
 

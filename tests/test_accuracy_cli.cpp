@@ -71,5 +71,38 @@ TEST(AccuracyCommand, RefusesAnotherScene) {
   EXPECT_NE(refused.output.find("not the store's scene"), std::string::npos) << refused.output;
 }
 
+// --list-worse names exactly the receivers counted as worse than raw. The papers' texel-centre
+// intervals (--no-exit-caps) under a grazing sun light ground just past the roof's shadow edge off
+// the texel centre, where raw (the centre's own depth) shadows it: leaks the list must show.
+TEST(AccuracyCommand, ListsTheReceiversWorseThanRaw) {
+  TempDir dir;
+  const auto scene = dir.path() / "roof.obj", store = dir.path() / "store";
+  std::ofstream(scene) << kRoofOverGround;
+  CliRun built = run("build " + scene.string() + " --out " + store.string() +
+                     " -r 64 --tile 64 -m raw,mh,dagmh --sun 135,20 --receivers surfaces --no-exit-caps");
+  ASSERT_EQ(built.code, 0) << built.output;
+  CliRun counted = run("accuracy " + store.string() + " " + scene.string() + " --receivers 4000 --json --list-worse");
+  ASSERT_EQ(counted.code, 0) << counted.output;
+  const auto json = nlohmann::json::parse(counted.output.substr(counted.output.find('{')));
+  EXPECT_FALSE(json["methods"]["raw"].contains("worse"));
+  for (const char* method : {"mh", "dagmh"}) {
+    const auto& m = json["methods"][method];
+    ASSERT_TRUE(m.contains("worse")) << method;
+    EXPECT_GT(m["worse_than_raw"].get<size_t>(), 0u) << method;
+    EXPECT_EQ(m["worse"].size(), m["worse_than_raw"].get<size_t>()) << method;
+    for (const auto& w : m["worse"]) {
+      EXPECT_EQ(w["mesh_kind"], "open");
+      EXPECT_LT(w["texel"][0].get<uint32_t>(), 64u);
+      // Lit by a stored value deeper than the receiver less the bias, where raw's is shallower.
+      EXPECT_GT(w["value"].get<double>(), w["raw_value"].get<double>()) << w.dump();
+      EXPECT_GT(w["depth"].get<double>(), w["raw_value"].get<double>()) << w.dump();
+    }
+  }
+  // Without the flag no list is printed.
+  CliRun plain = run("accuracy " + store.string() + " " + scene.string() + " --receivers 4000 --json");
+  ASSERT_EQ(plain.code, 0) << plain.output;
+  EXPECT_FALSE(nlohmann::json::parse(plain.output.substr(plain.output.find('{')))["methods"]["mh"].contains("worse"));
+}
+
 }  // namespace
 }  // namespace shadowtiles
