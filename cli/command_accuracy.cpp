@@ -9,8 +9,10 @@
 // still shows as a leak.
 // Used by bench/build_sizes.py --accuracy for the two-contract size and leak table.
 // --list-worse names every receiver a method lights where raw and the truth shadow it (a leak beyond
-// raw's): position, mesh, light-space texel and depth, raw's and the method's stored values, so a
-// leak found on a 65536^2 run can be traced without rebuilding it.
+// raw's): position, mesh, light-space texel and depth, raw's and the method's stored values, and the
+// nearly closed meshes the build accepted as solids that enclose it (winding number of mesh + patches
+// >= 1/2: inside a solid by the contract, no receiver place), so a leak found on a 65536^2 run can be
+// traced without rebuilding it.
 // Exit codes: 0, 1 (failure), 2 (bad arguments), 4 (store or scene unreadable).
 #include <algorithm>
 #include <cmath>
@@ -23,6 +25,7 @@
 
 #include "builder/accuracy.hpp"
 #include "builder/embree_device.hpp"
+#include "builder/nearly_closed_meshes.hpp"
 #include "builder/receiver_sampler.hpp"
 #include "builder/scene_loader.hpp"
 #include "builder/solid_interior.hpp"
@@ -44,7 +47,23 @@ struct AccuracyFlags {
 };
 
 // The receivers `answers` lights where raw (and the truth) shadow them.
-nlohmann::json worse_receivers(const ShadowMap& map, const Scene& scene, store::Method method,
+// Names of the nearly closed meshes of `closed` (the scene closed as the build closed it) whose
+// solid contains `p`.
+nlohmann::json enclosing_nearly_closed(const Scene& closed, const Vec3& p) {
+  nlohmann::json names = nlohmann::json::array();
+  for (uint32_t m = 0; m < closed.meshes.size(); ++m) {
+    const MeshInfo& mesh = closed.meshes[m];
+    if (!mesh.nearly_closed) continue;
+    std::vector<std::array<uint32_t, 3>> cycle(closed.triangles.begin() + mesh.first_triangle,
+                                               closed.triangles.begin() + mesh.first_triangle + mesh.triangle_count);
+    for (size_t t = 0; t < closed.patch_triangles.size(); ++t)
+      if (closed.patch_mesh[t] == m) cycle.push_back(closed.patch_triangles[t]);
+    if (winding_number(closed.vertices, cycle, p) >= 0.5) names.push_back(mesh.name);
+  }
+  return names;
+}
+
+nlohmann::json worse_receivers(const ShadowMap& map, const Scene& scene, const Scene* closed, store::Method method,
                                std::span<const Receiver> receivers, std::span<const uint8_t> truths,
                                std::span<const uint8_t> raw_answers, std::span<const uint8_t> answers) {
   nlohmann::json list = nlohmann::json::array();
@@ -67,7 +86,8 @@ nlohmann::json worse_receivers(const ShadowMap& map, const Scene& scene, store::
                     {"light_uv", {p.u, p.v}},
                     {"depth", p.depth},
                     {"raw_value", raw_value ? double(*raw_value) : std::nan("")},
-                    {"value", value ? double(*value) : std::nan("")}});
+                    {"value", value ? double(*value) : std::nan("")},
+                    {"inside_nearly_closed", closed ? enclosing_nearly_closed(*closed, r.position) : nlohmann::json::array()}});
   }
   return list;
 }
@@ -120,6 +140,7 @@ int run(const AccuracyFlags& flags) {
   std::stable_partition(methods.begin(), methods.end(),
                         [](store::Method m) { return store::method_properties(m).reference; });
   std::vector<uint8_t> raw_answers;
+  std::unique_ptr<Scene> closed_scene;  // for --list-worse: the scene closed as the build closed it
   if (!flags.json && inside_solids)
     std::printf("%zu of %zu receivers lie inside solids (no receiver place under either contract): left out\n",
                 inside_solids, flags.receivers);
@@ -139,7 +160,12 @@ int run(const AccuracyFlags& flags) {
         {"truth_lit", acc->truth_lit},           {"differs_from_raw", acc->differs_from_raw},
         {"worse_than_raw", acc->worse_than_raw}, {"outside_map", acc->outside_map}};
     if (flags.list_worse && !is_raw && !raw_answers.empty()) {
-      nlohmann::json worse = worse_receivers(**map, *scene, method, receivers, truths, raw_answers, answers);
+      if (meta.nearly_closed && !closed_scene) {
+        closed_scene = std::make_unique<Scene>(*scene);
+        close_nearly_closed_meshes(*closed_scene, nearly_closed_options(meta));
+      }
+      nlohmann::json worse =
+          worse_receivers(**map, *scene, closed_scene.get(), method, receivers, truths, raw_answers, answers);
       if (!flags.json)
         for (const nlohmann::json& w : worse) std::printf("%s worse than raw: %s\n", store::method_name(method), w.dump().c_str());
       out["methods"][store::method_name(method)]["worse"] = std::move(worse);

@@ -92,6 +92,7 @@ TEST(AccuracyCommand, ListsTheReceiversWorseThanRaw) {
     EXPECT_EQ(m["worse"].size(), m["worse_than_raw"].get<size_t>()) << method;
     for (const auto& w : m["worse"]) {
       EXPECT_EQ(w["mesh_kind"], "open");
+      EXPECT_EQ(w["inside_nearly_closed"], nlohmann::json::array());  // no mesh here is accepted as a solid
       EXPECT_LT(w["texel"][0].get<uint32_t>(), 64u);
       // Lit by a stored value deeper than the receiver less the bias, where raw's is shallower.
       EXPECT_GT(w["value"].get<double>(), w["raw_value"].get<double>()) << w.dump();
