@@ -46,7 +46,6 @@ struct AccuracyFlags {
   bool list_worse = false;
 };
 
-// The receivers `answers` lights where raw (and the truth) shadow them.
 // Names of the nearly closed meshes of `closed` (the scene closed as the build closed it) whose
 // solid contains `p`.
 nlohmann::json enclosing_nearly_closed(const Scene& closed, const Vec3& p) {
@@ -63,6 +62,7 @@ nlohmann::json enclosing_nearly_closed(const Scene& closed, const Vec3& p) {
   return names;
 }
 
+// The receivers `answers` lights where raw (and the truth) shadow them.
 nlohmann::json worse_receivers(const ShadowMap& map, const Scene& scene, const Scene* closed, store::Method method,
                                std::span<const Receiver> receivers, std::span<const uint8_t> truths,
                                std::span<const uint8_t> raw_answers, std::span<const uint8_t> answers) {
@@ -87,7 +87,8 @@ nlohmann::json worse_receivers(const ShadowMap& map, const Scene& scene, const S
                     {"depth", p.depth},
                     {"raw_value", raw_value ? double(*raw_value) : std::nan("")},
                     {"value", value ? double(*value) : std::nan("")},
-                    {"inside_nearly_closed", closed ? enclosing_nearly_closed(*closed, r.position) : nlohmann::json::array()}});
+                    {"inside_nearly_closed",
+                     closed ? enclosing_nearly_closed(*closed, r.position) : nlohmann::json::array()}});
   }
   return list;
 }
@@ -167,7 +168,8 @@ int run(const AccuracyFlags& flags) {
       nlohmann::json worse =
           worse_receivers(**map, *scene, closed_scene.get(), method, receivers, truths, raw_answers, answers);
       if (!flags.json)
-        for (const nlohmann::json& w : worse) std::printf("%s worse than raw: %s\n", store::method_name(method), w.dump().c_str());
+        for (const nlohmann::json& w : worse)
+          std::printf("%s worse than raw: %s\n", store::method_name(method), w.dump().c_str());
       out["methods"][store::method_name(method)]["worse"] = std::move(worse);
     }
     if (!flags.json)
