@@ -14,9 +14,10 @@ std::vector<uint8_t> point_truth(const GroundTruth& truth, std::span<const Recei
 
 Result<PointAccuracy> point_accuracy(const ShadowMap& map, store::Method method, std::span<const Receiver> receivers,
                                      std::span<const uint8_t> truth, std::span<const uint8_t> raw_answers,
-                                     std::vector<uint8_t>* answers_out) {
+                                     std::vector<uint8_t>* answers_out, std::vector<size_t>* worse_out) {
   PointAccuracy acc;
   if (answers_out) answers_out->assign(receivers.size(), 0);
+  if (worse_out) worse_out->clear();
   for (size_t i = 0; i < receivers.size(); ++i) {
     auto answer = map.query(receivers[i].position, method);
     if (!answer) return answer.error();
@@ -28,7 +29,10 @@ Result<PointAccuracy> point_accuracy(const ShadowMap& map, store::Method method,
     if (!lit && truly_lit) ++acc.false_shadowed;
     if (!raw_answers.empty() && (raw_answers[i] != 0) != lit) {
       ++acc.differs_from_raw;
-      acc.worse_than_raw += (raw_answers[i] != 0) == truly_lit;
+      if ((raw_answers[i] != 0) == truly_lit) {
+        ++acc.worse_than_raw;
+        if (worse_out) worse_out->push_back(i);
+      }
     }
     if (answers_out) (*answers_out)[i] = lit ? 1 : 0;
   }

@@ -39,10 +39,12 @@ struct PointAccuracy {
 std::vector<uint8_t> point_truth(const GroundTruth& truth, std::span<const Receiver> receivers);
 
 // `answers_out` (optional) receives the method's answers; `raw_answers` (optional, same length as
-// receivers) are compared with them.
+// receivers) are compared with them; `worse_out` (optional) receives the indices of the receivers
+// counted in worse_than_raw, in order.
 Result<PointAccuracy> point_accuracy(const ShadowMap& map, store::Method method, std::span<const Receiver> receivers,
                                      std::span<const uint8_t> truth, std::span<const uint8_t> raw_answers = {},
-                                     std::vector<uint8_t>* answers_out = nullptr);
+                                     std::vector<uint8_t>* answers_out = nullptr,
+                                     std::vector<size_t>* worse_out = nullptr);
 
 // Supersampled ground-truth PCF fraction per receiver, for `map`'s frame and default bias.
 std::vector<float> pcf_truth(const ShadowMap& map, const GroundTruth& truth, std::span<const Receiver> receivers,

@@ -8,11 +8,11 @@
 // nearly closed meshes are not loaded as solids here, so a receiver their patches would wrongly enclose
 // still shows as a leak.
 // Used by bench/build_sizes.py --accuracy for the two-contract size and leak table.
-// --list-worse names every receiver a method lights where raw and the truth shadow it (a leak beyond
-// raw's): position, mesh, light-space texel and depth, raw's and the method's stored values, and the
-// nearly closed meshes the build accepted as solids that enclose it (winding number of mesh + patches
-// >= 1/2: inside a solid by the contract, no receiver place), so a leak found on a 65536^2 run can be
-// traced without rebuilding it.
+// --list-worse names every receiver counted as worse than raw (lit where raw and the truth shadow it,
+// a leak; or shadowed where both light it): position, mesh, light-space texel and depth, raw's and the
+// method's values as their queries used them, and the nearly closed meshes the build accepted as
+// solids that enclose it (winding number of mesh + patches >= 1/2: inside a solid by the contract, no
+// receiver place), so a leak found on a 65536^2 run can be traced without rebuilding it.
 // Exit codes: 0, 1 (failure), 2 (bad arguments), 4 (store or scene unreadable).
 #include <algorithm>
 #include <cmath>
@@ -62,31 +62,30 @@ nlohmann::json enclosing_nearly_closed(const Scene& closed, const Vec3& p) {
   return names;
 }
 
-// The receivers `answers` lights where raw (and the truth) shadow them.
-nlohmann::json worse_receivers(const ShadowMap& map, const Scene& scene, const Scene* closed, store::Method method,
-                               std::span<const Receiver> receivers, std::span<const uint8_t> truths,
-                               std::span<const uint8_t> raw_answers, std::span<const uint8_t> answers) {
+// The receivers `worse` (indices from point_accuracy), each queried again for the method and raw.
+Result<nlohmann::json> worse_receivers(const ShadowMap& map, const Scene& scene, const Scene* closed,
+                                       store::Method method, std::span<const Receiver> receivers,
+                                       std::span<const size_t> worse) {
   nlohmann::json list = nlohmann::json::array();
-  const store::Method raw = store::Method::raw;
-  for (size_t i = 0; i < receivers.size() && i < answers.size() && i < raw_answers.size(); ++i) {
-    if (!answers[i] || raw_answers[i] || truths[i]) continue;
+  for (const size_t i : worse) {
     const Receiver& r = receivers[i];
-    const LightSpacePoint p = map.frame().to_light(r.position);
-    const uint32_t u = uint32_t(std::clamp(p.u, 0.0, double(map.layout().resolution() - 1)));
-    const uint32_t v = uint32_t(std::clamp(p.v, 0.0, double(map.layout().resolution() - 1)));
-    auto raw_value = map.texel_value(raw, u, v);
-    auto value = map.texel_value(method, u, v);
+    auto answer = map.query(r.position, method);
+    if (!answer) return answer.error();
+    auto raw = map.query(r.position, store::Method::raw);
+    if (!raw) return raw.error();
+    const LightSpacePoint& p = answer->light;
     const uint32_t mesh = r.triangle < scene.triangle_mesh.size() ? scene.triangle_mesh[r.triangle] : 0;
     list.push_back({{"position", {r.position[0], r.position[1], r.position[2]}},
                     {"normal", {r.normal[0], r.normal[1], r.normal[2]}},
                     {"triangle", r.triangle},
                     {"mesh", mesh < scene.meshes.size() ? scene.meshes[mesh].name : std::string()},
                     {"mesh_kind", mesh < scene.meshes.size() ? mesh_kind_name(scene.meshes[mesh].kind) : ""},
-                    {"texel", {u, v}},
+                    {"lit", answer->lit},
+                    {"texel", {uint32_t(p.u), uint32_t(p.v)}},
                     {"light_uv", {p.u, p.v}},
                     {"depth", p.depth},
-                    {"raw_value", raw_value ? double(*raw_value) : std::nan("")},
-                    {"value", value ? double(*value) : std::nan("")},
+                    {"raw_value", raw->value},
+                    {"value", answer->value},
                     {"inside_nearly_closed",
                      closed ? enclosing_nearly_closed(*closed, r.position) : nlohmann::json::array()}});
   }
@@ -149,9 +148,9 @@ int run(const AccuracyFlags& flags) {
                         {"contract", receiver_contract_name(meta.receivers)}, {"methods", nlohmann::json::object()}};
   for (store::Method method : methods) {
     const bool is_raw = store::method_properties(method).reference;
-    std::vector<uint8_t> answers;
+    std::vector<size_t> worse;
     auto acc = point_accuracy(**map, method, receivers, truths, is_raw ? std::span<const uint8_t>{} : raw_answers,
-                              is_raw ? &raw_answers : &answers);
+                              is_raw ? &raw_answers : nullptr, &worse);
     if (!acc) {
       spdlog::error("{}: {}", store::method_name(method), acc.error().message);
       return exit_code_for(acc.error());
@@ -165,12 +164,15 @@ int run(const AccuracyFlags& flags) {
         closed_scene = std::make_unique<Scene>(*scene);
         close_nearly_closed_meshes(*closed_scene, nearly_closed_options(meta));
       }
-      nlohmann::json worse =
-          worse_receivers(**map, *scene, closed_scene.get(), method, receivers, truths, raw_answers, answers);
+      auto listed = worse_receivers(**map, *scene, closed_scene.get(), method, receivers, worse);
+      if (!listed) {
+        spdlog::error("{}: {}", store::method_name(method), listed.error().message);
+        return exit_code_for(listed.error());
+      }
       if (!flags.json)
-        for (const nlohmann::json& w : worse)
+        for (const nlohmann::json& w : *listed)
           std::printf("%s worse than raw: %s\n", store::method_name(method), w.dump().c_str());
-      out["methods"][store::method_name(method)]["worse"] = std::move(worse);
+      out["methods"][store::method_name(method)]["worse"] = std::move(*listed);
     }
     if (!flags.json)
       std::printf("%-6s false lit %6llu  false shadowed %6llu  (of %zu receivers; differs from raw %llu)\n",
@@ -196,7 +198,7 @@ void add_accuracy_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--cache-mib", flags->cache_mib, "Decoded tile cache")->capture_default_str();
   cmd->add_flag("--json", flags->json, "Print JSON");
   cmd->add_flag("--list-worse", flags->list_worse,
-                "Name every receiver a method lights where raw and the truth shadow it (needs raw stored)");
+                "Name every receiver a method answers worse than raw (needs raw stored)");
   cmd->callback([flags, &exit_code] { exit_code = run(*flags); });
 }
 

@@ -71,9 +71,10 @@ TEST(AccuracyCommand, RefusesAnotherScene) {
   EXPECT_NE(refused.output.find("not the store's scene"), std::string::npos) << refused.output;
 }
 
-// --list-worse names exactly the receivers counted as worse than raw. The papers' texel-centre
-// intervals (--no-exit-caps) under a grazing sun light ground just past the roof's shadow edge off
-// the texel centre, where raw (the centre's own depth) shadows it: leaks the list must show.
+// --list-worse names exactly the receivers counted as worse than raw (point_accuracy's own list).
+// The papers' texel-centre intervals (--no-exit-caps) under a grazing sun light ground just past the
+// roof's shadow edge off the texel centre, where raw (the centre's own depth) shadows it: leaks the
+// list must show.
 TEST(AccuracyCommand, ListsTheReceiversWorseThanRaw) {
   TempDir dir;
   const auto scene = dir.path() / "roof.obj", store = dir.path() / "store";
@@ -92,6 +93,7 @@ TEST(AccuracyCommand, ListsTheReceiversWorseThanRaw) {
     EXPECT_EQ(m["worse"].size(), m["worse_than_raw"].get<size_t>()) << method;
     for (const auto& w : m["worse"]) {
       EXPECT_EQ(w["mesh_kind"], "open");
+      EXPECT_EQ(w["lit"], true) << w.dump();  // this scene's worse answers are leaks
       EXPECT_EQ(w["inside_nearly_closed"], nlohmann::json::array());  // no mesh here is accepted as a solid
       EXPECT_LT(w["texel"][0].get<uint32_t>(), 64u);
       // Lit by a stored value deeper than the receiver less the bias, where raw's is shallower.
