@@ -77,15 +77,21 @@ int run(int argc, char** argv) {
     for (unsigned kernel : {1u, 3u}) {
       if (!has_mode(kernel == 1 ? "point" : "pcf3")) continue;
       for (auto [order, points] : {std::pair<const char*, const std::vector<Vec3>*>{"rows", &rows}, {"random", &random}}) {
-        double rate[2] = {0, 0};
+        bench::InterleavedRates pair;  // 1 and 2 threads in alternate rounds: their ratio is of one stretch of time
         for (unsigned threads : {1u, 2u}) {
-          auto r = bench::measure_lookup_rate(m, *method, *points, kernel, threads, seconds);
-          if (!r) {
-            std::fprintf(stderr, "%s\n", r.error().message.c_str());
+          auto round = bench::lookup_rounds(m, *method, *points, kernel, threads);
+          if (!round) {
+            std::fprintf(stderr, "%s\n", round.error().message.c_str());
             return 1;
           }
-          rate[threads - 1] = r->lookups_per_second;
+          pair.add(std::move(*round));
         }
+        auto measured = pair.run(seconds);
+        if (!measured) {
+          std::fprintf(stderr, "%s\n", measured.error().message.c_str());
+          return 1;
+        }
+        const double rate[2] = {(*measured)[0].lookups_per_second, (*measured)[1].lookups_per_second};
         std::printf("%-6s %-6s %-7s %10.2f M %10.2f M %8.2f\n", name.c_str(), kernel == 1 ? "point" : "pcf3", order,
                     rate[0] / 1e6, rate[1] / 1e6, rate[0] > 0 ? rate[1] / rate[0] : 0.0);
         std::fflush(stdout);

@@ -84,15 +84,19 @@ Status measure_store(const BenchConfig& config, const SceneSpec& spec, uint32_t 
   spdlog::info("  ground-truth PCF: {:.1f} s", std::chrono::duration<double>(Clock::now() - t0).count());
   PointOrders orders = make_orders((*map)->frame(), data.uniform, data.camera, config.seed);
 
-  // The peer a user would pick instead: one Embree occlusion ray toward the sun per receiver, same
-  // receivers, orders and threads as the store's lookups; every rate below is divided by it.
-  Json embree;
+  // Every rate below is measured in interleaved rounds (lookup_rate.hpp): the store's methods, both
+  // thread counts, point and PCF, and the peer a user would pick instead, one Embree occlusion ray
+  // toward the sun per receiver (same receivers, orders and threads), so each ratio divides figures
+  // of the same stretch of wall time.
+  InterleavedRates rates;
+  std::vector<std::pair<std::string, size_t>> embree_keys;  // key in every row -> measurement
   auto ray = [&truth](const Vec3& p) { return truth.lit(p) ? 1.0 : 0.0; };
-  for (auto& [order, points] : {std::pair<const char*, const std::vector<Vec3>*>{"rows", &orders.rows},
-                                {"camera", &orders.camera}, {"random", &orders.random}})
+  const std::vector<std::pair<const char*, const std::vector<Vec3>*>> order_points{
+      {"rows", &orders.rows}, {"camera", &orders.camera}, {"random", &orders.random}};
+  for (auto& [order, points] : order_points)
     for (unsigned threads : config.threads)
-      embree["embree_lps_point_" + std::string(order) + "_t" + std::to_string(threads)] =
-          measure_point_rate(*points, threads, config.min_seconds, ray).lookups_per_second;
+      embree_keys.push_back({"embree_lps_point_" + std::string(order) + "_t" + std::to_string(threads),
+                             rates.add(point_rounds(*points, threads, ray))});
   // The batch points as query_batch orders them (tile, then Morton inside it), for the batch peer.
   std::vector<Vec3> batch_sorted = data.batch;
   {
@@ -107,11 +111,9 @@ Status measure_store(const BenchConfig& config, const SceneSpec& spec, uint32_t 
     std::sort(keyed.begin(), keyed.end());
     for (size_t i = 0; i < keyed.size(); ++i) batch_sorted[i] = data.batch[keyed[i].second];
   }
-  for (unsigned threads : config.threads)
-    embree["embree_lps_batch_t" + std::to_string(threads)] =
-        measure_point_rate(batch_sorted, threads, config.min_seconds, ray).lookups_per_second;
-  spdlog::info("  Embree occlusion rays: rows {:.2f} M/s, random {:.2f} M/s (1 thread)",
-               embree.value("embree_lps_point_rows_t1", 0.0) / 1e6, embree.value("embree_lps_point_random_t1", 0.0) / 1e6);
+  if (!batch_sorted.empty())
+    for (unsigned threads : config.threads)
+      embree_keys.push_back({"embree_lps_batch_t" + std::to_string(threads), rates.add(point_rounds(batch_sorted, threads, ray))});
 
   std::vector<uint8_t> raw_uniform, raw_camera;
   for (store::Method method : methods) {
@@ -171,32 +173,53 @@ Status measure_store(const BenchConfig& config, const SceneSpec& spec, uint32_t 
       row["pcf" + std::to_string(k) + "_mae"] = pcf->mean_abs_error;
     }
 
-    // Speed.
-    uint64_t misses = 0;
-    std::vector<unsigned> kernels{1};
-    kernels.insert(kernels.end(), config.pcf_kernels.begin(), config.pcf_kernels.end());
+    rows.push_back(std::move(row));
+  }
+
+  // Speed: every method's lookups scheduled beside Embree's, then run together.
+  std::vector<std::vector<std::pair<std::string, size_t>>> method_keys(methods.size());
+  std::vector<unsigned> kernels{1};
+  kernels.insert(kernels.end(), config.pcf_kernels.begin(), config.pcf_kernels.end());
+  for (size_t m = 0; m < methods.size(); ++m) {
     for (unsigned k : kernels) {
       const std::string kind = k == 1 ? "point" : "pcf" + std::to_string(k);
-      for (auto& [order, points] : {std::pair<const char*, const std::vector<Vec3>*>{"rows", &orders.rows},
-                                    {"camera", &orders.camera}, {"random", &orders.random}}) {
+      for (auto& [order, points] : order_points)
         for (unsigned threads : config.threads) {
-          auto rate = measure_lookup_rate(**map, method, *points, k, threads, config.min_seconds);
-          if (!rate) return rate.error();
-          row["lps_" + kind + "_" + order + "_t" + std::to_string(threads)] = rate->lookups_per_second;
-          misses += rate->cache_misses;
+          auto round = lookup_rounds(**map, methods[m], *points, k, threads);
+          if (!round) return round.error();
+          method_keys[m].push_back({"lps_" + kind + "_" + order + "_t" + std::to_string(threads), rates.add(std::move(*round))});
         }
-      }
     }
     // Batch queries (query_batch) of the shuffled batch points, point and PCF 3x3.
     for (unsigned threads : config.threads) {
       if (data.batch.empty()) break;
       for (unsigned k : {1u, 3u}) {
-        auto rate = measure_batch_rate(**map, method, data.batch, k, threads, config.min_seconds);
-        if (!rate) return rate.error();
-        row[std::string(k == 1 ? "lps_batch" : "lps_batch_pcf3") + "_t" + std::to_string(threads)] =
-            rate->lookups_per_second;
-        misses += rate->cache_misses;
+        auto round = batch_rounds(**map, methods[m], data.batch, k, threads);
+        if (!round) return round.error();
+        method_keys[m].push_back({std::string(k == 1 ? "lps_batch" : "lps_batch_pcf3") + "_t" + std::to_string(threads),
+                                  rates.add(std::move(*round))});
       }
+    }
+  }
+  t0 = Clock::now();
+  auto measured = rates.run(config.min_seconds);
+  if (!measured) return measured.error();
+  spdlog::info("  lookup rates: {} measurements in interleaved rounds, {:.1f} s", rates.size(),
+               std::chrono::duration<double>(Clock::now() - t0).count());
+  Json embree;
+  for (auto& [key, index] : embree_keys) embree[key] = (*measured)[index].lookups_per_second;
+  spdlog::info("  Embree occlusion rays: rows {:.2f} M/s, random {:.2f} M/s (1 thread)",
+               embree.value("embree_lps_point_rows_t1", 0.0) / 1e6, embree.value("embree_lps_point_random_t1", 0.0) / 1e6);
+
+  for (size_t m = 0; m < methods.size(); ++m) {
+    const store::Method method = methods[m];
+    const char* name = store::method_name(method);
+    Json& row = rows[rows.size() - methods.size() + m];
+    const MethodSize size = sizes->count(method) ? sizes->at(method) : MethodSize{};
+    uint64_t misses = 0;
+    for (auto& [key, index] : method_keys[m]) {
+      row[key] = (*measured)[index].lookups_per_second;
+      misses += (*measured)[index].cache_misses;
     }
     row["lookup_cache_misses"] = misses;
     for (auto& [key, value] : embree.items()) row[key] = value;
@@ -251,9 +274,7 @@ Status measure_store(const BenchConfig& config, const SceneSpec& spec, uint32_t 
       row["decoded_over_payload"] = size.payload_bytes ? double(cs.bytes) / double(size.payload_bytes) : 0.0;
     }
     spdlog::info("  {} {}^2 {}: {} B, error {:.3f}%, point rows {:.2f} M/s", spec.name, resolution, name,
-                 size.blob_bytes, 100.0 * acc->error_rate(),
-                 row.value("lps_point_rows_t1", 0.0) / 1e6);
-    rows.push_back(std::move(row));
+                 size.blob_bytes, 100.0 * row.value("error_rate", 0.0), row.value("lps_point_rows_t1", 0.0) / 1e6);
   }
   return {};
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -75,35 +76,29 @@ Result<LookupRate> timed_cyclic_lookups(std::span<const Vec3> points, unsigned t
   return rate;
 }
 
-// A timed measurement in rounds; the rate reported is the best round's (lookups and seconds are the
-// totals). On a shared machine a neighbour's burst slows some rounds and the one-window rate with
-// it (the same PCF/point cell read 1.77 and 3.86 in two runs of unchanged code); the best round is
-// the code's own speed. Both sides of every ratio (store and Embree, 1 and 2 threads, point and
-// PCF) are measured this way.
-constexpr unsigned kRounds = 5;
-
-template <typename Measure>
-Result<LookupRate> best_of_rounds(double min_seconds, const Measure& measure) {
-  LookupRate best;
-  uint64_t lookups = 0;
-  double seconds = 0;
-  for (unsigned round = 0; round < kRounds; ++round) {
-    Result<LookupRate> rate = measure(min_seconds / kRounds);
-    if (!rate) return rate.error();
-    lookups += rate->lookups;
-    seconds += rate->seconds;
-    if (rate->lookups_per_second > best.lookups_per_second) best = *rate;
-  }
-  best.lookups = lookups;
-  best.seconds = seconds;
-  return best;
-}
-
 }  // namespace
 
-Result<LookupRate> measure_lookup_rate(const ShadowMap& map, store::Method method, std::span<const Vec3> points,
-                                       unsigned kernel, unsigned threads, double min_seconds) {
-  if (points.empty() || threads == 0) return LookupRate{};
+Result<std::vector<LookupRate>> InterleavedRates::run(double min_seconds, unsigned rounds) const {
+  rounds = std::max(1u, rounds);
+  std::vector<LookupRate> best(rounds_.size());
+  std::vector<LookupRate> total(rounds_.size());
+  for (unsigned round = 0; round < rounds; ++round) {
+    for (size_t i = 0; i < rounds_.size(); ++i) {
+      Result<LookupRate> rate = rounds_[i](min_seconds / rounds);
+      if (!rate) return rate.error();
+      total[i].lookups += rate->lookups;
+      total[i].seconds += rate->seconds;
+      total[i].cache_misses += rate->cache_misses;
+      best[i].lookups_per_second = std::max(best[i].lookups_per_second, rate->lookups_per_second);
+    }
+  }
+  for (size_t i = 0; i < rounds_.size(); ++i) total[i].lookups_per_second = best[i].lookups_per_second;
+  return total;
+}
+
+Result<InterleavedRates::Round> lookup_rounds(const ShadowMap& map, store::Method method,
+                                              std::span<const Vec3> points, unsigned kernel, unsigned threads) {
+  if (threads == 0) return make_error(ErrorCode::invalid_input, "lookup rounds need at least one thread");
   double sink = 0;
   for (const Vec3& p : points) {  // warm-up: decode and cache the tiles
     auto value = look_up(map, method, p, kernel);
@@ -111,51 +106,55 @@ Result<LookupRate> measure_lookup_rate(const ShadowMap& map, store::Method metho
     sink += *value;
   }
   if (sink < 0) std::abort();
-  const uint64_t misses_before = map.cache_stats().misses;
-  auto rate = best_of_rounds(min_seconds, [&](double seconds) {
-    return timed_cyclic_lookups(points, threads, seconds,
-                                [&](const Vec3& p) { return look_up(map, method, p, kernel); });
+  return InterleavedRates::Round([&map, method, points, kernel, threads](double seconds) -> Result<LookupRate> {
+    if (points.empty()) return LookupRate{};
+    const uint64_t misses_before = map.cache_stats().misses;
+    auto rate = timed_cyclic_lookups(points, threads, seconds,
+                                     [&](const Vec3& p) { return look_up(map, method, p, kernel); });
+    if (!rate) return rate.error();
+    rate->cache_misses = map.cache_stats().misses - misses_before;
+    return rate;
   });
-  if (!rate) return rate.error();
-  rate->cache_misses = map.cache_stats().misses - misses_before;
-  return rate;
 }
 
-LookupRate measure_point_rate(std::span<const Vec3> points, unsigned threads, double min_seconds,
-                              const std::function<double(const Vec3&)>& look_up) {
-  if (points.empty() || threads == 0) return LookupRate{};
+InterleavedRates::Round point_rounds(std::span<const Vec3> points, unsigned threads,
+                                     std::function<double(const Vec3&)> look_up) {
   double sink = 0;
   for (const Vec3& p : points) sink += look_up(p);  // warm-up
   if (sink < 0) std::abort();
-  return *best_of_rounds(min_seconds, [&](double seconds) {
+  return [points, threads, look_up = std::move(look_up)](double seconds) -> Result<LookupRate> {
+    if (points.empty() || threads == 0) return LookupRate{};
     return timed_cyclic_lookups(points, threads, seconds, look_up);  // look_up cannot fail
-  });
+  };
 }
 
-Result<LookupRate> measure_batch_rate(const ShadowMap& map, store::Method method, std::span<const Vec3> points,
-                                      unsigned kernel, unsigned threads, double min_seconds) {
-  LookupRate rate;
-  if (points.empty() || threads == 0) return rate;
+Result<InterleavedRates::Round> batch_rounds(const ShadowMap& map, store::Method method,
+                                             std::span<const Vec3> points, unsigned kernel, unsigned threads) {
   ShadowMap::BatchOptions options;
   options.kernel = kernel;
   options.threads = threads;
-  ShadowMap::BatchAnswers answers;
-  if (Status s = map.query_batch(points, method, options, answers); !s) return s.error();  // warm-up
-  const uint64_t misses_before = map.cache_stats().misses;
-  const auto start = Clock::now();
-  unsigned batches = 0;
-  do {  // each batch is a round (best_of_rounds): the best batch's rate is reported
-    const auto batch_start = Clock::now();
-    if (Status s = map.query_batch(points, method, options, answers); !s) return s.error();
-    const double batch_seconds = std::chrono::duration<double>(Clock::now() - batch_start).count();
-    if (batch_seconds > 0)
-      rate.lookups_per_second = std::max(rate.lookups_per_second, double(points.size()) / batch_seconds);
-    rate.lookups += points.size();
-    rate.seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    ++batches;
-  } while (rate.seconds < min_seconds || batches < 3);
-  rate.cache_misses = map.cache_stats().misses - misses_before;
-  return rate;
+  // Shared by the copies of the round (std::function copies): the batch's buffers, kept between
+  // batches as a caller would keep them.
+  auto answers = std::make_shared<ShadowMap::BatchAnswers>();
+  if (!points.empty())
+    if (Status s = map.query_batch(points, method, options, *answers); !s) return s.error();  // warm-up
+  return InterleavedRates::Round([&map, method, points, options, answers](double seconds) -> Result<LookupRate> {
+    LookupRate rate;
+    if (points.empty()) return rate;
+    const uint64_t misses_before = map.cache_stats().misses;
+    const auto start = Clock::now();
+    do {  // the round's rate is its best batch's
+      const auto batch_start = Clock::now();
+      if (Status s = map.query_batch(points, method, options, *answers); !s) return s.error();
+      const double batch_seconds = std::chrono::duration<double>(Clock::now() - batch_start).count();
+      if (batch_seconds > 0)
+        rate.lookups_per_second = std::max(rate.lookups_per_second, double(points.size()) / batch_seconds);
+      rate.lookups += points.size();
+      rate.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    } while (rate.seconds < seconds);
+    rate.cache_misses = map.cache_stats().misses - misses_before;
+    return rate;
+  });
 }
 
 Result<Latency> measure_point_latency(const ShadowMap& map, store::Method method, std::span<const Vec3> points) {
