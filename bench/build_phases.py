@@ -48,7 +48,7 @@ def main():
         row += [f"{p / t:.1f}" for p in parts] + [f"{idle:.1f}"]
         print("| " + " | ".join(row) + " |")
     print(f"\nRun {args.run}: commit {doc.get('git_commit')}, {doc.get('date')}, methods {','.join(doc['methods'])}, "
-          f"{doc['resolution']}^2; seconds per worker thread.")
+          f"{doc['resolution']}^2" + (f" in {doc['tile']}^2 tiles" if "tile" in doc else "") + "; seconds per worker thread.")
 
 
 if __name__ == "__main__":

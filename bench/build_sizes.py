@@ -36,6 +36,7 @@ def main():
     ap.add_argument("--cli", default="build/cli/shadowtiles", help="the shadowtiles executable")
     ap.add_argument("--receivers", default="anywhere", help="receiver contracts to build, comma-separated")
     ap.add_argument("--work", default="out/build-sizes-store", help="scratch store directory")
+    ap.add_argument("--tile", type=int, default=0, help="tile side (default: the config's tile_size)")
     ap.add_argument("--accuracy", type=int, default=0, help="surface receivers for the error counts (0: none)")
     args = ap.parse_args()
 
@@ -47,6 +48,7 @@ def main():
     dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True,
                            text=True).stdout.strip() != ""
     doc = {"resolution": args.resolution, "methods": args.methods.split(","), "config": args.config,
+           "tile": min(args.tile or config.get("tile_size", 4096), args.resolution),
            "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "git_commit": commit, "git_dirty": dirty,
            "scenes": []}
     if os.path.exists(args.out):
@@ -59,7 +61,7 @@ def main():
         if (wanted and name not in wanted) or (name, args.resolution, receivers) in done:
             continue
         cmd = [args.cli, "-q", "build", os.path.join(root, scene["file"]), "-o", args.work, "--overwrite", "--json",
-               "-r", str(args.resolution), "--tile", str(min(config.get("tile_size", 4096), args.resolution)),
+               "-r", str(args.resolution), "--tile", str(min(args.tile or config.get("tile_size", 4096), args.resolution)),
                "-j", str(config.get("build_threads", 2)), "-m", args.methods, "--up", scene.get("up", "z"),
                "--sun", ",".join(str(x) for x in scene.get("sun", [135, 45])),
                "--receivers", receivers]

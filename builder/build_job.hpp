@@ -36,7 +36,7 @@ struct BuildConfig {
   Vec3 light_direction{0, 0, -1};
   std::optional<uint32_t> resolution;   // one of resolution / texel_size
   std::optional<double> texel_size;
-  uint32_t tile_size = 4096;
+  uint32_t tile_size = 2048;  // the CLI's default (cli/command_build.cpp says why)
   unsigned threads = 2;
   std::vector<store::Method> methods{store::Method::raw};
   LoadOptions load;

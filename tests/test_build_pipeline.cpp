@@ -295,6 +295,32 @@ TEST(Cli, DefaultBuildStoresDagmhRecordsUpAxisAndHintsAtOpenMeshes) {
   EXPECT_EQ(output.find("open meshes"), std::string::npos) << output;
 }
 
+// Without --tile a build cuts the map into 2048^2 tiles (docs/build-time.md: faster builds, a third of
+// the peak memory of 4096^2 tiles); a map smaller than that is one tile.
+TEST(Cli, DefaultTileIs2048) {
+  TempDir dir;
+  std::string scene = testing::shared_scene("bunny/stanford-bunny.obj").string();
+  std::string output;
+  ASSERT_EQ(testing::run_command(testing::cli_path().string() + " build " + scene + " --up y -r 4096 -q --out " +
+                                     (dir.path() / "big").string(),
+                                 &output),
+            0)
+      << output;
+  auto big = ShadowMap::open(dir.path() / "big");
+  ASSERT_TRUE(big.ok());
+  EXPECT_EQ((*big)->layout().tile_size(), 2048u);
+  EXPECT_EQ((*big)->layout().tiles_per_side(), 2u);
+  ASSERT_EQ(testing::run_command(testing::cli_path().string() + " build " + scene + " --up y -r 1024 -q --out " +
+                                     (dir.path() / "small").string(),
+                                 &output),
+            0)
+      << output;
+  auto small = ShadowMap::open(dir.path() / "small");
+  ASSERT_TRUE(small.ok());
+  EXPECT_EQ((*small)->layout().tile_size(), 1024u);
+  EXPECT_EQ((*small)->layout().tiles_per_side(), 1u);
+}
+
 TEST(Cli, QueryPrintsLitAndGroundTruth) {
   TempDir dir;
   std::string scene = testing::shared_scene("fzk_haus/fzk_haus.obj").string();
