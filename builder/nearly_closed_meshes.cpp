@@ -3,28 +3,18 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
-#include <numbers>
 #include <unordered_map>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "builder/mesh_classifier.hpp"
+#include "builder/winding_number_tree.hpp"
 #include "codec/vec3_math.hpp"
 #include "common/parallel_for.hpp"
 
 namespace shadowtiles {
 namespace {
-
-// Signed solid angle of triangle (a, b, c) seen from p, over 4 pi (Van Oosterom and Strackee 1983):
-// positive when p is on the side the counter-clockwise normal points away from.
-double triangle_winding(const Vec3& pa, const Vec3& pb, const Vec3& pc, const Vec3& p) {
-  const Vec3 a = sub(pa, p), b = sub(pb, p), c = sub(pc, p);
-  const double la = norm(a), lb = norm(b), lc = norm(c);
-  const double det = dot(a, cross(b, c));
-  const double denominator = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
-  return std::atan2(det, denominator) / (2 * std::numbers::pi);
-}
 
 // Net uses of each undirected edge: key a<<32|b (a < b) -> forward (a->b) minus backward uses.
 std::unordered_map<uint64_t, int64_t> net_edges(std::span<const std::array<uint32_t, 3>> triangles) {
@@ -204,10 +194,13 @@ NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOp
         r.max_deviation = std::max(r.max_deviation, deviation);
         if (deviation > options.tolerance) r.ambiguous_area += weight;
       }
-      // samples x triangles solid angles: most of a large scan's load time, so on every build thread.
+      // The mesh's part at every full point: hierarchically (winding_number_tree.hpp; the brute-force
+      // sum of samples x triangles solid angles was most of a large scan's load time), on every build
+      // thread.
       std::vector<double> w_mesh(full_points.size());
+      const WindingNumberTree tree(scene.vertices, triangles);
       parallel_for_ranges(options.threads, full_points.size(), [&](size_t begin, size_t end) {
-        for (size_t k = begin; k < end; ++k) w_mesh[k] = winding_number(scene.vertices, triangles, full_points[k].p);
+        for (size_t k = begin; k < end; ++k) w_mesh[k] = tree(full_points[k].p);
       });
       double full_weight = 0, misplaced_weight = 0;
       for (size_t k = 0; k < full_points.size(); k += 2) {  // each full sample's outside, then inside point

@@ -27,7 +27,9 @@
 // where only the exit counter and the exit caps see them (never a first hit, never a receiver or an
 // occluder: builder/dual_depth_renderer, builder/receiver_surface_caps, builder/reference_caps).
 //
-// Cost: O(sampled triangles x patch triangles) solid angles per mesh, samples capped at max_samples
+// Cost: O(sampled triangles x patch triangles) solid angles per mesh, samples capped at max_samples,
+// plus the whole winding numbers of the full samples through a WindingNumberTree (hierarchical:
+// about a boundary's worth of solid angles per node near the point, not one per triangle)
 // (area-stratified, deterministic). Thread safety: pure functions. Untrusted input: safe (indices come
 // from Scene::add_mesh, which checked them).
 #pragma once
