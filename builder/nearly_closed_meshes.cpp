@@ -173,6 +173,9 @@ NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOp
         double w_patch;
       };
       std::vector<FullPoint> full_points;
+      // The patch's part at both points of every sample: a tree too (a long boundary's patch has up
+      // to max_patch_triangles triangles, x max_samples x 2 points).
+      const WindingNumberTree patch_tree(scene.vertices, patch.triangles);
       for (size_t s = 0; s < samples.size(); ++s) {
         const auto& [i, weight] = samples[s];
         const auto& t = triangles[i];
@@ -187,7 +190,7 @@ NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOp
         for (double side : {1.0, -1.0}) {
           Vec3 p{};
           for (int k = 0; k < 3; ++k) p[k] = (a[k] + b[k] + c[k]) / 3 + side * eps * n[k] / length;
-          const double w_patch = winding_number(scene.vertices, patch.triangles, p);
+          const double w_patch = patch_tree(p);
           deviation = std::max(deviation, std::fabs(w_patch));
           if (full) full_points.push_back({s, side > 0, p, w_patch});
         }
