@@ -87,12 +87,22 @@ def section(entries, sources, commits, build_time, kept=None):
              "built from the same intervals, so it is CPVS under the same contract. Losslessness under each "
              "contract is checked by `shadowtiles verify` (brute-force caps; test_receiver_contracts, "
              "test_receiver_contracts_long at 4096^2), not by this table. wall/rays = build wall time / dual-depth ray-casting wall time "
-             "of a build of MH, MMH and DAG-MH in one run (issue 14's build-time figure; `*`: of the six-method build, "
+             "of a build of MH, MMH and DAG-MH in one run (issue 14's build-time figure" +
+             (f"; those runs in {', '.join(sorted({str(e['_tile']) + '^2' for e in build_time.values() if e.get('_tile')}))} tiles"
+              if any(e.get("_tile") for e in build_time.values()) else "") +
+             "; `*`: of the six-method build, "
              "where no such run is given). Rows (scene, resolution, contract) not in these runs are kept from the report's "
              "previous regeneration" + (f" ({kept['sources']})" if kept["sizes"] and kept["sources"] else "") + ".", "",
              "| scene | kind | res | contract | raw | MH | MMH | DAG-MH | CPVS | SST | DAG-MH/CPVS | MMH/MH | wall/rays |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    size_rows = list(kept["sizes"])
+    size_rows = []
+    for line in kept["sizes"]:  # a kept row takes the wall/rays of a build-time run given now
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        timed = build_time.get((cells[0], res_value(cells[2]), cells[3]))
+        if timed:
+            cells[12] = f"{timed['stats']['wall_over_ray_casting']:.2f}"
+            line = "| " + " | ".join(cells) + " |"
+        size_rows.append(line)
     for e in entries:
         b = e["stats"]["bytes_by_method"]
         ratio = lambda x, y: f"{b[x] / b[y]:.2f}" if b.get(x) and b.get(y) else "-"
@@ -172,6 +182,7 @@ def main():
                 doc = json.load(f)
             commits.append(doc.get("git_commit", "?") + (" dirty" if doc.get("git_dirty") else ""))
             for e in doc["scenes"]:
+                e["_tile"] = doc.get("tile")  # the run's tile side (runs since session 15 record it)
                 found[(e["scene"], e["resolution"], e.get("receivers", "anywhere"))] = e
         return found
 

@@ -74,4 +74,17 @@ with tempfile.TemporaryDirectory() as tmp:
              and not l.startswith("| scene")]
     order = [(int(l.split("|")[3].strip()[:-1]), l.split("|")[1].strip()) for l in table]
     assert order == sorted(order), f"size rows out of (resolution, scene) order: {order}"
+
+    # A build-time run alone (a new tile size, say) updates the wall/rays of kept 4K rows and names
+    # its tile; their bytes stay.
+    with open("out/time-4k-t2048.json", "w") as f:
+        json.dump({"resolution": 4096, "tile": 2048, "git_commit": "dddd", "git_dirty": False,
+                   "scenes": [{"scene": "nefertiti", "resolution": 4096, "receivers": "anywhere",
+                               "stats": {"bytes_by_method": {}, "wall_over_ray_casting": 1.25}}]}, f)
+    fifth = regenerate(md, "out/fzk-64k.json", build_time=["out/time-4k-t2048.json"])
+    retimed = [l for l in fifth.splitlines() if l.startswith("| nefertiti |") and " | 4K | anywhere |" in l and l.count("|") == 14]
+    assert len(retimed) == 1 and retimed[0].endswith("| 1.25 |"), retimed
+    before = [l for l in fourth.splitlines() if l.startswith("| nefertiti |") and " | 4K | anywhere |" in l and l.count("|") == 14]
+    assert retimed[0].rsplit("|", 2)[0] == before[0].rsplit("|", 2)[0], (retimed, before)  # bytes unchanged
+    assert "those runs in 2048^2 tiles" in fifth, fifth
 print("contract_sizes.py keeps the rows it did not rerun: ok")
