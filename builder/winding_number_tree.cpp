@@ -117,8 +117,9 @@ uint32_t WindingNumberTree::build(uint32_t first, uint32_t count, Boundary& boun
   node.left = left;
   node.right = right;
   node.edge_first = uint32_t(edges_.size());
-  // The cone only pays when it has fewer triangles than the node; otherwise the node is never capped.
-  if (boundary.size() < count) {
+  // The cone pays when it has fewer triangles than the node; at most half as many keeps the stored
+  // edges within half the triangles per tree level on any input (a soup of strips included).
+  if (2 * boundary.size() < count) {
     for (const auto& [key, net] : boundary) {
       const uint32_t a = uint32_t(key >> 32), b = uint32_t(key);
       if (net > 0) edges_.push_back({a, b, int32_t(net)});
