@@ -187,8 +187,20 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
   ReceiverCapCounts local;
   const Box box{std::min({a.u, b.u, c.u}), std::max({a.u, b.u, c.u}), std::min({a.v, b.v, c.v}),
                 std::max({a.v, b.v, c.v})};
+  // No clipped point lies above the triangle's shallowest vertex by more than rounding (far below
+  // 1e-12 of a depth in [0, 1]); `floor_cap` is a float at or below every such point, so a texel whose
+  // cap is already at or below it keeps its cap whatever the clipping returns: skipped, the result is
+  // the same bit for bit (a closed mesh's back faces reach a texel from several regions).
+  const double shallowest = std::min({a.depth, b.depth, c.depth});
+  const double below = shallowest - 1e-12 * (1.0 + std::fabs(shallowest));
+  float floor_cap = float(below);
+  if (double(floor_cap) > below) floor_cap = std::nextafter(floor_cap, -std::numeric_limits<float>::infinity());
   auto clip_texel = [&](uint32_t i, uint32_t j, double su, double sv) {
     float& slot = cap[size_t(j) * size + i];
+    if (slot <= floor_cap) {
+      ++local.already_lower;
+      return;
+    }
     slot = std::min(slot, float(clipped_shallowest(a, b, c, box, su, sv)));
   };
   for (uint32_t j = j0; j <= j1; ++j) {
@@ -232,6 +244,7 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
     counts->clipped += local.clipped;
     counts->interior += local.interior;
     counts->fallback += local.fallback;
+    counts->already_lower += local.already_lower;
   }
 }
 

@@ -30,6 +30,8 @@ struct ReceiverCapCounts {
   uint64_t interior = 0;   // texels inside the triangle: closed form
   uint64_t fallback = 0;   // interior texels whose closed form sat too close to a float rounding
                            // boundary to be sure, clipped instead (counted in `interior` too)
+  uint64_t already_lower = 0;  // of those to clip, texels whose cap was already at or below the
+                               // triangle's shallowest vertex: left as they were, unclipped
 };
 
 // A square window of texels: texel (i, j) covers global texels [u0 + i, u0 + i + 1] x [v0 + j, ...].

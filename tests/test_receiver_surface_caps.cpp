@@ -86,6 +86,24 @@ class Draw {
   std::mt19937_64 rng_;
 };
 
+// Many triangles lowering one window, as a tile's overlapping surfaces do: texels whose cap is already
+// at or below a triangle's shallowest vertex are skipped unclipped, and the window must still equal
+// the reference's, bit for bit, with the skip taken.
+TEST(ReceiverSurfaceCaps, OverlappingTrianglesSkipTexelsAlreadyLowerAndStillMatch) {
+  Draw draw(3);
+  const float inf = std::numeric_limits<float>::infinity();
+  std::vector<float> fast(size_t(kWindow.size) * kWindow.size, inf), reference = fast;
+  ReceiverCapCounts counts;
+  for (int n = 0; n < 3000; ++n) {
+    const Triangle t = draw.around_point(draw.around(kWindow, 2), draw.log_uniform(0.3, 6));
+    lower_caps_by_triangle(t.a, t.b, t.c, kWindow, fast, &counts);
+    reference_lower_caps(t.a, t.b, t.c, kWindow, reference);
+  }
+  EXPECT_EQ(differing_texels(fast, reference), 0u);
+  EXPECT_GT(counts.already_lower, 0u) << "overlapping triangles must exercise the skip";
+  EXPECT_LT(counts.already_lower, counts.clipped + counts.fallback) << "and some texels are still clipped";
+}
+
 TEST(ReceiverSurfaceCaps, RandomTrianglesOfAllSizesMatchTheClipping) {
   Draw draw(1);
   ReceiverCapCounts counts;
