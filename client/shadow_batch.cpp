@@ -15,7 +15,7 @@
 #include <mutex>
 #include <thread>
 
-#include "codec/morton.hpp"
+#include "client/batch_texel_keys.hpp"
 #include "client/shadow_map.hpp"
 #include "common/parallel_for.hpp"
 
@@ -23,7 +23,7 @@ namespace shadowtiles {
 namespace {
 
 using BatchItem = ShadowMap::BatchSortItem;
-constexpr uint64_t kOffMap = ~uint64_t(0);
+constexpr uint64_t kOffMap = BatchTexelKeys::kOffMapKey;
 constexpr unsigned kBucketBits = 12;
 constexpr size_t kMinPointsPerChunk = 8192;
 constexpr size_t kChunksPerBatch = 16;
@@ -37,8 +37,9 @@ constexpr size_t kQueryBlock = 256;  // point queries handed to a decoder at onc
 // group changes no answer and little sharing, while finishing it (an insertion sort, or a second
 // pass) cost half of the batch's sort time (fzk_haus 16384², 1M points: ~500 per bucket).
 constexpr size_t kSmallGroup = 4;
-void sort_low_bits(BatchItem* items, BatchItem* scratch, size_t n, unsigned bits, unsigned keep_below) {
-  if (n < 2 || bits == 0) return;
+// Returns where the ordered items are: `items` or `scratch` (no copy back after an odd number of passes).
+const BatchItem* sort_low_bits(BatchItem* items, BatchItem* scratch, size_t n, unsigned bits, unsigned keep_below) {
+  if (n < 2 || bits == 0) return items;
   unsigned sorted_bits = 0;  // a multiple of 8 (or all the bits)
   while (sorted_bits < bits && ((n >> sorted_bits) > kSmallGroup || bits - sorted_bits > keep_below))
     sorted_bits += 8;
@@ -54,7 +55,7 @@ void sort_low_bits(BatchItem* items, BatchItem* scratch, size_t n, unsigned bits
     for (size_t i = 0; i < n; ++i) to[count[(from[i].key >> shift) & digit_mask]++] = from[i];
     std::swap(from, to);
   }
-  if (from != items) std::copy(from, from + n, items);
+  return from;
 }
 
 }  // namespace
@@ -109,45 +110,58 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   std::vector<uint32_t>& histogram = out.sort_histogram;
   histogram.assign(chunks * (buckets + 1), 0);
   const double resolution = layout_.resolution();
-  auto bucket_of = [&](uint64_t key) { return key == kOffMap ? buckets : size_t(key >> low_bits); };
+  const BatchTexelKeys keys = BatchTexelKeys::for_key_bits(key_bits);
+  auto bucket_of = [&](uint64_t key) { return key == kOffMap ? buckets : size_t(keys.code(key) >> low_bits); };
 
   // A: transform, key, histogram.
   parallel_for(chunks, [&](size_t c0, size_t c1) {
+    // Locals, not captures: the histogram's stores could alias captured values, which would be
+    // reloaded per point.
+    const LightFrame frame = frame_;
+    const unsigned shift = low_bits;
+    const BatchTexelKeys texel_keys = keys;
+    const size_t off_bucket = buckets;
+    const double res = resolution, bias = bias_depth;
     for (size_t c = c0; c < c1 && !failed; ++c) {
       uint32_t* hist = &histogram[c * (buckets + 1)];
       for (size_t i = c * points_per_chunk, end = std::min(n, i + points_per_chunk); i < end; ++i) {
         const Vec3& p = points[i];
         if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
           return fail(make_error(ErrorCode::invalid_input, "point coordinates must be finite"));
-        const LightSpacePoint light = frame_.to_light(p);
+        const LightSpacePoint light = frame.to_light(p);
         BatchItem& item = items[i];
         item.index = uint32_t(i);
-        if (!(light.u >= 0 && light.u < resolution && light.v >= 0 && light.v < resolution)) {
+        if (!(light.u >= 0 && light.u < res && light.v >= 0 && light.v < res)) {
           item.key = kOffMap;
           item.threshold = 0;
+          ++hist[off_bucket];
         } else {
-          item.key = morton_encode(uint32_t(light.u), uint32_t(light.v));
-          item.threshold = float(std::min(light.depth, 1.0) - bias_depth);  // biased_depth(), bias hoisted
+          item.key = texel_keys.make(uint32_t(light.u), uint32_t(light.v));
+          item.threshold = float(std::min(light.depth, 1.0) - bias);  // biased_depth(), bias hoisted
+          ++hist[texel_keys.code(item.key) >> shift];
         }
-        ++hist[bucket_of(item.key)];
       }
     }
   });
   if (first_error) return *first_error;
-  // Offsets: bucket-major, chunk-minor, so the scatter is stable.
+  // Offsets: bucket-major, chunk-minor, so the scatter is stable. Computed chunk by chunk, along
+  // the histogram's rows in memory (bucket by bucket strode 16 kB per step).
   std::vector<uint32_t> bucket_start(buckets + 2, 0);
+  for (size_t c = 0; c < chunks; ++c) {
+    const uint32_t* hist = &histogram[c * (buckets + 1)];
+    for (size_t b = 0; b <= buckets; ++b) bucket_start[b + 1] += hist[b];
+  }
+  for (size_t b = 0; b <= buckets; ++b) bucket_start[b + 1] += bucket_start[b];
   {
-    uint32_t at = 0;
-    for (size_t b = 0; b <= buckets; ++b) {
-      bucket_start[b] = at;
-      for (size_t c = 0; c < chunks; ++c) {
-        uint32_t& h = histogram[c * (buckets + 1) + b];
-        const uint32_t count = h;
-        h = at;
-        at += count;
+    std::vector<uint32_t> next(bucket_start.begin(), bucket_start.end() - 1);
+    for (size_t c = 0; c < chunks; ++c) {
+      uint32_t* hist = &histogram[c * (buckets + 1)];
+      for (size_t b = 0; b <= buckets; ++b) {
+        const uint32_t count = hist[b];
+        hist[b] = next[b];
+        next[b] += count;
       }
     }
-    bucket_start[buckets + 1] = at;
   }
   // B: scatter.
   parallel_for(chunks, [&](size_t c0, size_t c1) {
@@ -180,12 +194,13 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
       if (s == e) continue;
       // Always ordered, even sparse buckets whose points share no node below the skip-list entry:
       // skipping the sort saved 10-15% of MH/DAG-MH instructions but cost 6-10% of their time.
-      sort_low_bits(&sorted[s], &items[s], e - s, low_bits, tile_key_shift);
+      // `bucket` indexes like `sorted` (from 0), into whichever array the sort left the order in.
+      const BatchItem* const bucket = sort_low_bits(&sorted[s], &items[s], e - s, low_bits, tile_key_shift) - s;
       for (uint32_t run = s; run < e && !failed;) {
-        const uint64_t id = sorted[run].key >> tile_key_shift;
+        const uint64_t id = keys.code(bucket[run].key) >> tile_key_shift;
         uint32_t run_end = run + 1;
-        while (run_end < e && (sorted[run_end].key >> tile_key_shift) == id) ++run_end;
-        const uint32_t tu = morton_u(sorted[run].key) >> tile_shift_, tv = morton_v(sorted[run].key) >> tile_shift_;
+        while (run_end < e && (keys.code(bucket[run_end].key) >> tile_key_shift) == id) ++run_end;
+        const uint32_t tu = keys.u(bucket[run].key) >> tile_shift_, tv = keys.v(bucket[run].key) >> tile_shift_;
         if (id != tile_id) {
           auto found = shared_tile(store::TileKey{method, layout_.tile_level(), tu, tv}, 0);
           if (!found) return fail(found.error());
@@ -195,16 +210,16 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
         if (kernel == 1) {
           if (coarse) {
             for (uint32_t i = run; i < run_end; ++i) {
-              const BatchItem& item = sorted[i];
-              auto value = top_value(method, morton_u(item.key), morton_v(item.key), *level);
+              const BatchItem& item = bucket[i];
+              auto value = top_value(method, keys.u(item.key), keys.v(item.key), *level);
               out.lit[item.index] = value ? float(item.threshold <= *value) : 1.0f;
             }
           } else if (tile) {
             for (uint32_t i = run; i < run_end;) {
               const size_t block = std::min<size_t>(kQueryBlock, run_end - i);
               for (size_t j = 0; j < block; ++j) {
-                const BatchItem& item = sorted[i + j];
-                queries[j] = {morton_u(item.key) & tile_mask, morton_v(item.key) & tile_mask, item.threshold};
+                const BatchItem& item = bucket[i + j];
+                queries[j] = {keys.u(item.key) & tile_mask, keys.v(item.key) & tile_mask, item.threshold};
                 query_index[j] = item.index;
               }
               tile->lit_sorted({queries, block}, max_level, lit);
@@ -221,8 +236,8 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
             block = 0;
           };
           for (uint32_t i = run; i < run_end; ++i) {
-            const BatchItem& item = sorted[i];
-            const int64_t gu = morton_u(item.key), gv = morton_v(item.key);
+            const BatchItem& item = bucket[i];
+            const int64_t gu = keys.u(item.key), gv = keys.v(item.key);
             const int64_t lu = gu & tile_mask, lv = gv & tile_mask;
             uint64_t count;
             if (!level && tile && lu >= half && lv >= half && lu + half < size && lv + half < size) {

@@ -122,7 +122,7 @@ class ShadowMap {
   };
   // One point in query_batch's sort (internal; here so BatchAnswers can keep the sort's buffers).
   struct BatchSortItem {
-    uint64_t key;  // Morton code of the texel, or all ones off the map
+    uint64_t key;  // Morton code of the texel and maybe its u, v (client/batch_texel_keys.hpp), or all ones off the map
     uint32_t index;
     float threshold;  // biased depth
   };

@@ -27,6 +27,16 @@ inline uint32_t morton_compact(uint64_t v) {
   return uint32_t(v);
 }
 inline uint64_t morton_encode(uint32_t u, uint32_t v) { return morton_spread(u) | (morton_spread(v) << 1); }
+// The same code for u, v < 2^16, both spread at once in one 64-bit word (u low, v high): half the
+// operations of two morton_spread calls, for the batch query's per-point pass.
+inline uint32_t morton_encode16(uint32_t u, uint32_t v) {
+  uint64_t x = uint64_t(u & 0xFFFF) | (uint64_t(v & 0xFFFF) << 32);
+  x = (x | (x << 8)) & 0x00FF00FF00FF00FFull;
+  x = (x | (x << 4)) & 0x0F0F0F0F0F0F0F0Full;
+  x = (x | (x << 2)) & 0x3333333333333333ull;
+  x = (x | (x << 1)) & 0x5555555555555555ull;
+  return uint32_t(x) | uint32_t(x >> 31);
+}
 inline uint32_t morton_u(uint64_t key) { return morton_compact(key); }
 inline uint32_t morton_v(uint64_t key) { return morton_compact(key >> 1); }
 
