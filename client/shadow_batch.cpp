@@ -111,16 +111,18 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   histogram.assign(chunks * (buckets + 1), 0);
   const double resolution = layout_.resolution();
   const BatchTexelKeys keys = BatchTexelKeys::for_key_bits(key_bits);
-  auto bucket_of = [&](uint64_t key) { return key == kOffMap ? buckets : size_t(keys.code(key) >> low_bits); };
+  // By value: a copy in a pass is then its own local state (see the transform pass).
+  auto bucket_of = [keys, low_bits, buckets](uint64_t key) {
+    return key == kOffMap ? buckets : size_t(keys.code(key) >> low_bits);
+  };
 
   // A: transform, key, histogram.
   parallel_for(chunks, [&](size_t c0, size_t c1) {
-    // Locals, not captures: the histogram's stores could alias captured values, which would be
-    // reloaded per point.
+    // Locals, not captures by reference: the histogram's stores could alias captured values, which
+    // would be reloaded per point.
     const LightFrame frame = frame_;
-    const unsigned shift = low_bits;
     const BatchTexelKeys texel_keys = keys;
-    const size_t off_bucket = buckets;
+    const auto bucket = bucket_of;
     const double res = resolution, bias = bias_depth;
     for (size_t c = c0; c < c1 && !failed; ++c) {
       uint32_t* hist = &histogram[c * (buckets + 1)];
@@ -134,12 +136,11 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
         if (!(light.u >= 0 && light.u < res && light.v >= 0 && light.v < res)) {
           item.key = kOffMap;
           item.threshold = 0;
-          ++hist[off_bucket];
         } else {
           item.key = texel_keys.make(uint32_t(light.u), uint32_t(light.v));
           item.threshold = float(std::min(light.depth, 1.0) - bias);  // biased_depth(), bias hoisted
-          ++hist[texel_keys.code(item.key) >> shift];
         }
+        ++hist[bucket(item.key)];
       }
     }
   });
