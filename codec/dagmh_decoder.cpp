@@ -10,6 +10,7 @@
 
 #include "codec/dagmh_format.hpp"
 #include "common/byte_order.hpp"
+#include "common/isa_clones.hpp"
 
 namespace shadowtiles {
 using namespace bytes;  // payload field loads (common/byte_order.hpp)
@@ -403,7 +404,7 @@ DagMhTileView::State DagMhTileView::start_state(uint32_t u, uint32_t v, unsigned
   return s.last;
 }
 
-uint32_t DagMhTileView::resolve(State s, uint32_t u, uint32_t v, unsigned stop) const {
+[[gnu::always_inline]] inline uint32_t DagMhTileView::resolve(State s, uint32_t u, uint32_t v, unsigned stop) const {
   while (s.kind == kDag && s.level < stop) step(s, u, v);
   if (s.kind == kTreelet) return treelet_find(s, u, v, stop);
   return s.last;
@@ -438,7 +439,7 @@ float DagMhTileView::value_at(uint32_t index) const { return value_of(index); }
   return F::dequantize(cl, cf, m);
 }
 
-float DagMhTileView::lookup(uint32_t u, uint32_t v, unsigned max_level) const {
+SHADOWTILES_ISA_CLONES float DagMhTileView::lookup(uint32_t u, uint32_t v, unsigned max_level) const {
   assert(u < size_ && v < size_);
   if (size_ == 0) return 1.0f;
   u &= size_ - 1;
@@ -447,7 +448,8 @@ float DagMhTileView::lookup(uint32_t u, uint32_t v, unsigned max_level) const {
   return value_of(resolve(start_state(u, v, stop), u, v, stop));
 }
 
-void DagMhTileView::lit_sorted(std::span<const TexelQuery> queries, unsigned max_level, uint8_t* lit) const {
+SHADOWTILES_ISA_CLONES void DagMhTileView::lit_sorted(std::span<const TexelQuery> queries, unsigned max_level,
+                                                          uint8_t* lit) const {
   if (size_ == 0) {
     for (size_t i = 0; i < queries.size(); ++i) lit[i] = queries[i].threshold <= 1.0f;
     return;
