@@ -43,7 +43,7 @@ class CpvsDecodedTile final : public DecodedTile {
   uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const override {
     return view_.lit_count(u0, v0, kw, kh, threshold);
   }
-  size_t memory_bytes() const override { return payload_.size() + sizeof(*this); }
+  size_t memory_bytes() const override { return payload_.size() + sizeof(*this) + view_.derived_bytes(); }
   std::vector<SizePart> size_breakdown() const override {
     const auto& s = view_.stats();
     return {{"cpvs header", s.header_bytes}, {"cpvs nodes", s.node_bytes}, {"cpvs leaf masks", s.leaf_bytes}};

@@ -16,6 +16,10 @@
 
 namespace shadowtiles {
 
+struct CpvsParseOptions {
+  unsigned max_skip_level = 8;  // deepest level of the skip table (0: none; see skip_ below)
+};
+
 class CpvsTileView {
  public:
   struct Stats {
@@ -27,12 +31,15 @@ class CpvsTileView {
   };
 
   CpvsTileView() = default;
-  static Result<CpvsTileView> parse(std::span<const uint8_t> payload);
+  static Result<CpvsTileView> parse(std::span<const uint8_t> payload, const CpvsParseOptions& options = {});
 
   uint32_t size() const { return tile_size_; }
   uint32_t depth_steps() const { return depth_steps_; }
   cpvs::LeafLayout layout() const { return layout_; }
   const Stats& stats() const { return stats_; }
+  // Bytes the view holds beside the payload: the skip table (at most an eighth of the payload).
+  size_t derived_bytes() const { return skip_.size() * sizeof(uint32_t); }
+  unsigned skip_level() const { return skip_level_; }
 
   // Preconditions for all lookups: u, v < size(); step < depth_steps().
   bool lit_at_step(uint32_t u, uint32_t v, uint32_t step) const;
@@ -54,6 +61,15 @@ class CpvsTileView {
                     const Box& box) const;
   uint32_t first_shadowed_in(unsigned level, const uint8_t* node, uint32_t side, uint32_t z0, uint32_t u,
                              uint32_t v) const;
+
+  // Skip table, derived at parse: for each cell of side 2^skip_shift_ in (u, v, step) (u, v inside
+  // the tile), where the descent stands after the top skip_level_ levels: a node's offset in level
+  // skip_level_'s region, or kSkipLit / kSkipShadowed when a code above decided the whole cell.
+  // Point lookups start there instead of at the root (skip_level_ 0: no table).
+  static constexpr uint32_t kSkipLit = 0xFFFFFFFFu, kSkipShadowed = 0xFFFFFFFEu;
+  std::vector<uint32_t> skip_;
+  unsigned skip_level_ = 0, skip_shift_ = 0;
+  uint32_t skip_side_ = 0;  // cells along u and v
 
   uint32_t tile_size_ = 0;
   uint32_t depth_steps_ = 0;

@@ -59,8 +59,10 @@ CpvsTileView parse_view(const std::vector<uint8_t>& payload) {
   return view.ok() ? *view : CpvsTileView{};
 }
 
-// Exhaustive over every voxel: lit below lit_end, shadowed from shadow_begin on.
-void expect_rule_holds(const TileIntervals& tile, uint32_t map_resolution, LeafLayout layout) {
+// Exhaustive over every voxel: lit below lit_end, shadowed from shadow_begin on. Lookups start at
+// the skip table's level (*skip_level), so every voxel is also checked against a view without one.
+void expect_rule_holds(const TileIntervals& tile, uint32_t map_resolution, LeafLayout layout,
+                       unsigned* skip_level = nullptr) {
   CpvsBuildOptions options;
   options.layout = layout;
   auto payload = encode_cpvs_tile(tile, map_resolution, options);
@@ -68,6 +70,10 @@ void expect_rule_holds(const TileIntervals& tile, uint32_t map_resolution, LeafL
   CpvsTileView view = parse_view(*payload);
   auto decoded = decode(*payload);
   ASSERT_TRUE(decoded);
+  if (skip_level) *skip_level = view.skip_level();
+  auto from_root = CpvsTileView::parse(*payload, CpvsParseOptions{.max_skip_level = 0});
+  ASSERT_TRUE(from_root.ok());
+  ASSERT_EQ(from_root->skip_level(), 0u);
   const uint32_t n = cpvs::depth_steps_for(map_resolution, tile.size);
   ASSERT_EQ(view.depth_steps(), n);
   ASSERT_EQ(view.size(), tile.size);
@@ -82,6 +88,11 @@ void expect_rule_holds(const TileIntervals& tile, uint32_t map_resolution, LeafL
         if (!lit && first_shadow == n) first_shadow = z;
         float centre = (float(z) + 0.5f) / float(n);
         ASSERT_EQ(decoded->lit(u, v, centre), lit) << "lit() quantises like lit_at_step";
+        ASSERT_EQ(from_root->lit_at_step(u, v, z), lit) << u << "," << v << " step " << z;
+        ASSERT_EQ(view.lit_count(u, v, 1, 1, centre), lit ? 1u : 0u) << u << "," << v << " step " << z;
+        if (u + 2 <= tile.size && v + 2 <= tile.size) {
+          ASSERT_EQ(view.lit_count(u, v, 2, 2, centre), from_root->lit_count(u, v, 2, 2, centre)) << u << "," << v;
+        }
         // A point query's sample: lit() in one descent, with a value that the comparison agrees with.
         for (float t : {float(z) / float(n), centre, std::nextafter(float(z + 1) / float(n), 0.0f)}) {
           const DecodedTile::Sample sample = decoded->sample(u, v, t);
@@ -109,12 +120,41 @@ void expect_rule_holds(const TileIntervals& tile, uint32_t map_resolution, LeafL
   EXPECT_GT(free_steps, 0u) << "the tile exercises free voxels";
 }
 
-TEST(Cpvs, EveryVoxelFollowsTheIntervalRuleSlab8) { expect_rule_holds(mixed_tile(32, 1), 64, LeafLayout::slab8); }
-TEST(Cpvs, EveryVoxelFollowsTheIntervalRuleCube4) { expect_rule_holds(mixed_tile(32, 2), 64, LeafLayout::cube4); }
+TEST(Cpvs, EveryVoxelFollowsTheIntervalRuleSlab8) {
+  unsigned skip = 0;
+  expect_rule_holds(mixed_tile(32, 1), 64, LeafLayout::slab8, &skip);
+  EXPECT_GT(skip, 0u) << "point lookups start from the skip table";
+}
+TEST(Cpvs, EveryVoxelFollowsTheIntervalRuleCube4) {
+  unsigned skip = 0;
+  expect_rule_holds(mixed_tile(32, 2), 64, LeafLayout::cube4, &skip);
+  EXPECT_GT(skip, 0u);
+}
+TEST(Cpvs, SkipTableCellsSplitTheTileInUAndV) {
+  // Tile as wide as the depth cube: level-2 cells are a quarter of the tile on each axis, so a
+  // lookup's cell depends on u, v and the step.
+  for (LeafLayout layout : {LeafLayout::slab8, LeafLayout::cube4}) {
+    unsigned skip = 0;
+    expect_rule_holds(mixed_tile(64, 9), 64, layout, &skip);
+    EXPECT_GE(skip, 2u);
+  }
+}
 TEST(Cpvs, TileNarrowerThanTheDepthCube) {
   // N = 256 steps, the tile is 16 texels wide: the cube's other texels are free and never queried.
-  expect_rule_holds(mixed_tile(16, 3), 256, LeafLayout::slab8);
+  // The skip table's cells then span the whole tile in u and v at the top levels.
+  unsigned skip = 0;
+  expect_rule_holds(mixed_tile(16, 3), 256, LeafLayout::slab8, &skip);
+  EXPECT_GT(skip, 0u);
   expect_rule_holds(mixed_tile(16, 4), 256, LeafLayout::cube4);
+}
+TEST(Cpvs, SkipTableStaysWithinAnEighthOfThePayload) {
+  for (uint32_t size : {32u, 64u, 128u}) {
+    auto payload = encode_cpvs_tile(mixed_tile(size, 7), 4 * size);
+    ASSERT_TRUE(payload.ok());
+    CpvsTileView view = parse_view(*payload);
+    EXPECT_LE(view.derived_bytes() * 8, payload->size()) << size;
+    EXPECT_GT(view.skip_level(), 0u) << size;
+  }
 }
 TEST(Cpvs, TinyTilesUseTheMinimumCube) {
   expect_rule_holds(mixed_tile(4, 5), 4, LeafLayout::slab8);
