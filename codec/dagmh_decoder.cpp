@@ -487,8 +487,8 @@ SHADOWTILES_ISA_CLONES void DagMhTileView::lit_sorted(std::span<const TexelQuery
   }
 }
 
-uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float depth,
-                                      float bias) const {
+SHADOWTILES_ISA_CLONES uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh,
+                                                             float depth, float bias) const {
   assert(kw >= 1 && kh >= 1 && u0 < size_ && v0 < size_ && kw <= size_ - u0 && kh <= size_ - v0);
   if (size_ == 0 || u0 >= size_ || v0 >= size_) return 0;
   kw = std::min(kw, size_ - u0);
@@ -501,8 +501,10 @@ uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uin
   return count_from_ancestor(s, u0, v0, u1, v1, depth, bias);
 }
 
-uint32_t DagMhTileView::count_from_ancestor(State s, uint32_t u0, uint32_t v0, uint32_t u1, uint32_t v1,
-                                            float depth, float bias) const {
+// Inlined into both PCF entry points, so it runs in their x86-64-v3 copies.
+[[gnu::always_inline]] inline uint32_t DagMhTileView::count_from_ancestor(State s, uint32_t u0, uint32_t v0,
+                                                                          uint32_t u1, uint32_t v1, float depth,
+                                                                          float bias) const {
   // The walk ended at or above the common ancestor: one value decides the whole box.
   if (s.kind == kDone) return depth <= value_of(s.last) + bias ? (u1 - u0 + 1) * (v1 - v0 + 1) : 0;
   const unsigned L = levels_;
@@ -530,7 +532,8 @@ uint32_t DagMhTileView::count_from_ancestor(State s, uint32_t u0, uint32_t v0, u
   return lit;
 }
 
-void DagMhTileView::pcf_count_sorted(std::span<const TexelQuery> corners, uint32_t k, uint32_t* counts) const {
+SHADOWTILES_ISA_CLONES void DagMhTileView::pcf_count_sorted(std::span<const TexelQuery> corners, uint32_t k,
+                                                            uint32_t* counts) const {
   for (const TexelQuery& c : corners)
     if (size_ == 0 || k == 0 || c.u >= size_ || c.v >= size_ || k > size_ - c.u || k > size_ - c.v) {
       // Out of contract (or a default-constructed view): answered as pcf_lit_count does, one by one.
