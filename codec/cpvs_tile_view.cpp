@@ -121,8 +121,8 @@ Result<CpvsTileView> CpvsTileView::parse(std::span<const uint8_t> payload, const
       return side * side << s;
     };
     unsigned S = 0;
-    for (unsigned s = 1; s + 1 < levels && s <= options.max_skip_level && entries(s) * sizeof(uint32_t) * 8 <= payload.size(); ++s)
-      S = s;
+    for (unsigned s = 1; s + 1 < levels && s <= options.max_skip_level; ++s)
+      if (entries(s) * sizeof(uint32_t) * 8 <= payload.size()) S = s;
     if (S > 0) {
       view.skip_level_ = S;
       view.skip_shift_ = log_n - S;
