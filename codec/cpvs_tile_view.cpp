@@ -18,6 +18,12 @@ uint64_t box_mask(unsigned row_bits, uint32_t x0, uint32_t x1, uint32_t y0, uint
   return mask;
 }
 
+// Octree child of voxel (u, v, step) in a node whose children have side `half` (format: bit 0
+// upper u half, bit 1 upper v half, bit 2 upper depth half).
+inline unsigned octant(uint32_t u, uint32_t v, uint32_t step, uint32_t half) {
+  return unsigned((u & half) != 0) | unsigned((v & half) != 0) << 1 | unsigned((step & half) != 0) << 2;
+}
+
 }  // namespace
 
 // Inlined into the walks: a call per level cost 2-5% of a point lookup.
@@ -128,7 +134,6 @@ Result<CpvsTileView> CpvsTileView::parse(std::span<const uint8_t> payload, const
       view.skip_shift_ = log_n - S;
       view.skip_side_ = std::max<uint32_t>(1, view.tile_size_ >> view.skip_shift_);
       view.skip_.resize(entries(S));
-      size_t at_entry = 0;
       for (uint32_t z = 0; z < (uint32_t(1) << S); ++z)
         for (uint32_t y = 0; y < view.skip_side_; ++y)
           for (uint32_t x = 0; x < view.skip_side_; ++x) {
@@ -137,8 +142,7 @@ Result<CpvsTileView> CpvsTileView::parse(std::span<const uint8_t> payload, const
             uint32_t entry = 0, half = n / 2;
             for (unsigned level = 0; level < S; ++level, half /= 2) {
               const uint16_t codes = bytes::load_le<uint16_t>(node);
-              const unsigned child =
-                  unsigned((u & half) != 0) | unsigned((v & half) != 0) << 1 | unsigned((step & half) != 0) << 2;
+              const unsigned child = octant(u, v, step, half);
               const unsigned code = cpvs::child_code(codes, child);
               if (code != cpvs::kCodeRef) {
                 entry = code == cpvs::kCodeLit ? kSkipLit : kSkipShadowed;
@@ -147,7 +151,7 @@ Result<CpvsTileView> CpvsTileView::parse(std::span<const uint8_t> payload, const
               node = view.child_node(level, node, codes, child);
               entry = uint32_t(node - view.level_begin_[level + 1]);
             }
-            view.skip_[at_entry++] = entry;
+            view.skip_[view.skip_index(u, v, step)] = entry;
           }
     }
   }
@@ -160,8 +164,7 @@ bool CpvsTileView::lit_at_step(uint32_t u, uint32_t v, uint32_t step) const {
   uint32_t half = depth_steps_ / 2;
   unsigned level = 0;
   if (skip_level_ != 0) {
-    const uint32_t entry =
-        skip_[(size_t(step >> skip_shift_) * skip_side_ + (v >> skip_shift_)) * skip_side_ + (u >> skip_shift_)];
+    const uint32_t entry = skip_[skip_index(u, v, step)];
     if (entry >= kSkipShadowed) return entry == kSkipLit;
     level = skip_level_;
     node = level_begin_[level] + entry;
@@ -172,8 +175,7 @@ bool CpvsTileView::lit_at_step(uint32_t u, uint32_t v, uint32_t step) const {
     const uint16_t codes = bytes::load_le<uint16_t>(node);
     const unsigned child = last && layout_ == cpvs::LeafLayout::slab8
                                ? (step & 7u)
-                               : unsigned((u & half) != 0) | unsigned((v & half) != 0) << 1 |
-                                     unsigned((step & half) != 0) << 2;
+                               : octant(u, v, step, half);
     const unsigned code = cpvs::child_code(codes, child);
     if (code != cpvs::kCodeRef) return code == cpvs::kCodeLit;
     if (!last) {
@@ -200,7 +202,7 @@ uint32_t CpvsTileView::lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t
   const uint32_t cu = u0 >> skip_shift_, cv = v0 >> skip_shift_;
   if (skip_level_ != 0 && (box.u1 - 1) >> skip_shift_ == cu && (box.v1 - 1) >> skip_shift_ == cv) {
     // The box lies in one skip cell (PCF kernels nearly always): start at the cell's entry.
-    const uint32_t entry = skip_[(size_t(uint32_t(step) >> skip_shift_) * skip_side_ + cv) * skip_side_ + cu];
+    const uint32_t entry = skip_[skip_index(u0, v0, uint32_t(step))];
     if (entry >= kSkipShadowed) return entry == kSkipLit ? kw * kh : 0;
     return count_in(skip_level_, level_begin_[skip_level_] + entry, depth_steps_ >> skip_level_, cu << skip_shift_,
                     cv << skip_shift_, uint32_t(step), box);

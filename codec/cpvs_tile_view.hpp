@@ -70,6 +70,10 @@ class CpvsTileView {
   std::vector<uint32_t> skip_;
   unsigned skip_level_ = 0, skip_shift_ = 0;
   uint32_t skip_side_ = 0;  // cells along u and v
+  // Entry of the cell holding voxel (u, v, step): depth-major, then v, then u.
+  size_t skip_index(uint32_t u, uint32_t v, uint32_t step) const {
+    return (size_t(step >> skip_shift_) * skip_side_ + (v >> skip_shift_)) * skip_side_ + (u >> skip_shift_);
+  }
 
   uint32_t tile_size_ = 0;
   uint32_t depth_steps_ = 0;
