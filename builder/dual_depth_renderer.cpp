@@ -401,7 +401,7 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
     std::vector<float> storage = buffers ? std::move(buffers->caps) : std::vector<float>{};
     std::vector<float> caps =
         options_.receivers == ReceiverContract::surfaces
-            ? second_layer_caps(device_.get(), scene_, tile, options_.coplanar_epsilon, *intervals, options_.exit_margin,
+            ? second_layer_caps(scene_, tile, options_.coplanar_epsilon, *intervals, options_.exit_margin,
                                 nullptr, std::move(storage))
             : receiver_surface_caps(scene_, tile, nullptr, std::move(storage));
     apply_exit_caps(*intervals, caps, options_.exit_margin);

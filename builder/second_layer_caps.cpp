@@ -2,13 +2,12 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <limits>
-#include <mutex>
 #include <span>
 #include <utility>
 
-#include "builder/embree_device.hpp"
 #include "builder/second_layer_rule.hpp"
 
 namespace shadowtiles {
@@ -25,9 +24,35 @@ struct Prepared {
   bool edge_on;
   double gu = 0, gv = 0;             // depth per texel along u, v
   std::array<double, 3> A{}, B{}, widen{};  // inward edge k: A (u - p_k.u) + B (v - p_k.v) + widen >= 0
+  // Box of the footprint with its edges widened (the corners of the widened triangle), which holds
+  // every point covered_by keeps; infinite for slivers whose widened corners are ill-conditioned.
+  double reach_lo_u = -kInfinity, reach_hi_u = kInfinity, reach_lo_v = -kInfinity, reach_hi_v = kInfinity;
+  double reach = kInfinity;  // how far a widened corner may lie from its vertex, at the most
 
   double depth_at(double u, double v) const { return p[0].depth + gu * (u - p[0].u) + gv * (v - p[0].v); }
 };
+
+// The widened triangle's corner at p_k: where the widened edges k - 1 and k meet.
+void widened_reach(Prepared& t) {
+  double lo_u = kInfinity, hi_u = -kInfinity, lo_v = kInfinity, hi_v = -kInfinity, reach = 0;
+  for (int k = 0; k < 3; ++k) {
+    const int j = (k + 2) % 3;  // edge j runs from p_j to p_k
+    // A_k (u - p_k.u) + B_k (v - p_k.v) = -widen_k and A_j (u - p_k.u) + B_j (v - p_k.v) = -widen_j
+    // (p_k lies on edge j, so both are written about p_k).
+    const double det = t.A[k] * t.B[j] - t.A[j] * t.B[k];
+    const double scale = std::hypot(t.A[k], t.B[k]) * std::hypot(t.A[j], t.B[j]);
+    if (!(std::fabs(det) > 1e-6 * scale)) return;  // a corner sharper than 1e-6 rad: keep the box infinite
+    const double du = (-t.widen[k] * t.B[j] + t.widen[j] * t.B[k]) / det;
+    const double dv = (-t.A[k] * t.widen[j] + t.A[j] * t.widen[k]) / det;
+    // Rounding of the solve (|du|, |dv| <= 2^-20 / 1e-6 texels) is covered by a further 2^-20 texels.
+    const double u = t.p[k].u + du, v = t.p[k].v + dv, pad = kWiden + std::fabs(du) + std::fabs(dv);
+    lo_u = std::min(lo_u, u - pad), hi_u = std::max(hi_u, u + pad);
+    lo_v = std::min(lo_v, v - pad), hi_v = std::max(hi_v, v + pad);
+    reach = std::max(reach, pad);
+  }
+  t.reach_lo_u = lo_u, t.reach_hi_u = hi_u, t.reach_lo_v = lo_v, t.reach_hi_v = hi_v;
+  t.reach = reach;
+}
 
 Prepared prepare(const LightSpacePoint& a, const LightSpacePoint& b, const LightSpacePoint& c) {
   Prepared t;
@@ -53,11 +78,15 @@ Prepared prepare(const LightSpacePoint& a, const LightSpacePoint& b, const Light
     t.B[k] = s * (q.u - p.u);
     t.widen[k] = kWiden * std::hypot(t.A[k], t.B[k]);
   }
+  widened_reach(t);
   return t;
 }
 
 struct Polygon {
-  std::array<LightSpacePoint, 24> at;
+  Polygon() {}  // `at` left uninitialised: only its first `count` points are ever read
+  union {
+    std::array<LightSpacePoint, 24> at;
+  };
   unsigned count = 0;
 };
 
@@ -79,10 +108,31 @@ void clip(const Polygon& in, Polygon& out, F value) {
   }
 }
 
+// True when an edge of either triangle separates `back` from `front`'s widened footprint, so that
+// covered_by keeps nothing: all of `back` outside a widened edge of `front` (what its clip would
+// find), or `front`'s vertices outside an edge of `back` by more than its corners' reach.
+bool apart(const Prepared& back, const Prepared& front) {
+  for (int k = 0; k < 3; ++k) {
+    const LightSpacePoint& e = front.p[k];
+    auto inside = [&](const LightSpacePoint& x) {
+      return front.A[k] * (x.u - e.u) + front.B[k] * (x.v - e.v) + front.widen[k] >= 0;
+    };
+    if (!inside(back.p[0]) && !inside(back.p[1]) && !inside(back.p[2])) return true;
+  }
+  if (!std::isfinite(front.reach)) return false;
+  for (int k = 0; k < 3; ++k) {
+    const LightSpacePoint& e = back.p[k];
+    const double beyond = -front.reach * back.widen[k] / kWiden;  // reach in units of back's edge function
+    auto outside = [&](const LightSpacePoint& x) { return back.A[k] * (x.u - e.u) + back.B[k] * (x.v - e.v) < beyond; };
+    if (outside(front.p[0]) && outside(front.p[1]) && outside(front.p[2])) return true;
+  }
+  return false;
+}
+
 // The part of `back` inside `front`'s footprint (its edges widened as the header says), into
-// `covered`; false when empty.
-bool covered_by(const Prepared& back, const Prepared& front, Polygon& covered) {
-  Polygon scratch;
+// `covered` (`scratch`: working space); false when empty.
+bool covered_by(const Prepared& back, const Prepared& front, Polygon& covered, Polygon& scratch) {
+  if (apart(back, front)) return false;
   Polygon* current = &covered;
   Polygon* next = &scratch;
   covered.count = 3;
@@ -95,19 +145,24 @@ bool covered_by(const Prepared& back, const Prepared& front, Polygon& covered) {
     std::swap(current, next);
     if (current->count < 3) return false;
   }
-  if (current != &covered) covered = *current;
+  if (current != &covered) {
+    std::copy_n(current->at.begin(), current->count, covered.at.begin());
+    covered.count = current->count;
+  }
   return true;
 }
 
 // The part of `covered` (on `back`, inside `front`'s footprint) lying behind `front` by at least
 // `gap` and, when `most` is finite, by at most `most`, into `region`; false when empty.
-bool region_behind(const Polygon& covered, const Prepared& front, double gap, double most, Polygon& region) {
-  clip(covered, region, [&](const LightSpacePoint& x) { return x.depth - front.depth_at(x.u, x.v) - gap; });
-  if (region.count >= 3 && std::isfinite(most)) {
-    Polygon scratch;
-    clip(region, scratch, [&](const LightSpacePoint& x) { return most - (x.depth - front.depth_at(x.u, x.v)); });
-    region = scratch;
+bool region_behind(const Polygon& covered, const Prepared& front, double gap, double most, Polygon& region,
+                   Polygon& scratch) {
+  if (!std::isfinite(most)) {
+    clip(covered, region, [&](const LightSpacePoint& x) { return x.depth - front.depth_at(x.u, x.v) - gap; });
+    return region.count >= 3;
   }
+  clip(covered, scratch, [&](const LightSpacePoint& x) { return x.depth - front.depth_at(x.u, x.v) - gap; });
+  if (scratch.count < 3) return false;
+  clip(scratch, region, [&](const LightSpacePoint& x) { return most - (x.depth - front.depth_at(x.u, x.v)); });
   return region.count >= 3;
 }
 
@@ -174,61 +229,64 @@ void lower_caps_above_floor(const Polygon& region, const TexelWindow& window, co
   }
 }
 
-// Pairs (i < j) of `candidates` whose widened footprint boxes overlap, found by Embree's BVH-BVH
-// collision on boxes spanning the whole depth range (so the 3D test is the 2D one).
-struct CollideData {
-  const std::vector<Prepared>* prepared;
-  const std::vector<uint32_t>* candidates;
-  double u0, v0;
-  std::mutex mutex;
-  std::vector<std::pair<uint32_t, uint32_t>> pairs;
-};
-
-void candidate_bounds(const RTCBoundsFunctionArguments* args) {
-  const auto* data = static_cast<const CollideData*>(args->geometryUserPtr);
-  const Prepared& t = (*data->prepared)[(*data->candidates)[args->primID]];
-  constexpr float kPad = 1.0f / 256;  // texels: covers the float rounding of tile-local bounds
-  RTCBounds* b = args->bounds_o;
-  b->lower_x = float(t.lo_u - data->u0) - kPad;
-  b->upper_x = float(t.hi_u - data->u0) + kPad;
-  b->lower_y = float(t.lo_v - data->v0) - kPad;
-  b->upper_y = float(t.hi_v - data->v0) + kPad;
-  b->lower_z = 0.0f;
-  b->upper_z = 1.0f;
-}
-
-void collect_pairs(void* user, RTCCollision* collisions, unsigned count) {
-  auto* data = static_cast<CollideData*>(user);
-  std::lock_guard lock(data->mutex);
-  for (unsigned k = 0; k < count; ++k) {
-    const uint32_t a = collisions[k].primID0, b = collisions[k].primID1;
-    if (a < b) data->pairs.emplace_back((*data->candidates)[a], (*data->candidates)[b]);
+// Calls visit(i, j) once for every pair of `candidates` whose footprint boxes, padded by 1/256 texel
+// for rounding, overlap. A uniform grid over the tile lists each box in the cells it touches; a pair
+// is visited in the one cell holding the corner (max lo_u, max lo_v) of the boxes' overlap. Pairs
+// are handled as they are found (no list of them: tens of millions on a city tile), on this thread.
+template <class Visit>
+void for_each_overlapping_pair(const std::vector<Prepared>& prepared, const std::vector<uint32_t>& candidates,
+                               const TexelWindow& window, Visit visit) {
+  if (candidates.size() < 2) return;
+  constexpr double kPad = 1.0 / 256;
+  struct Box {
+    double lo_u, hi_u, lo_v, hi_v;
+    uint32_t x0, y0;  // the cell of (lo_u, lo_v)
+  };
+  std::vector<Box> boxes(candidates.size());
+  double extent = 0;
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    const Prepared& t = prepared[candidates[k]];
+    const double u = window.u0, v = window.v0;
+    boxes[k] = {t.lo_u - u - kPad, t.hi_u - u + kPad, t.lo_v - v - kPad, t.hi_v - v + kPad, 0, 0};
+    extent += std::min(boxes[k].hi_u - boxes[k].lo_u, double(window.size)) +
+              std::min(boxes[k].hi_v - boxes[k].lo_v, double(window.size));
   }
-}
-
-std::vector<std::pair<uint32_t, uint32_t>> overlapping_pairs(RTCDevice device, const std::vector<Prepared>& prepared,
-                                                             const std::vector<uint32_t>& candidates,
-                                                             const TexelWindow& window) {
-  if (candidates.size() < 2) return {};
-  CollideData data{&prepared, &candidates, window.u0, window.v0, {}, {}};
-  EmbreeScene scene(rtcNewScene(device));
-  RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
-  rtcSetGeometryUserPrimitiveCount(geometry, unsigned(candidates.size()));
-  rtcSetGeometryUserData(geometry, &data);
-  rtcSetGeometryBoundsFunction(geometry, candidate_bounds, &data);
-  rtcCommitGeometry(geometry);
-  rtcAttachGeometry(scene.get(), geometry);
-  rtcReleaseGeometry(geometry);
-  rtcCommitScene(scene.get());
-  rtcCollide(scene.get(), scene.get(), collect_pairs, &data);
-  // A self-collision reports each pair from both sides; only (a < b) is kept. (Should one come twice
-  // the caps are the same: each region only lowers a minimum.)
-  return std::move(data.pairs);
+  // Cells about twice the mean box side: each box touches a few cells, each cell holds few boxes.
+  const double mean_side = extent / (2.0 * double(candidates.size()));
+  const uint32_t cell = uint32_t(std::clamp(std::bit_ceil(uint32_t(std::ceil(2 * mean_side))), 4u, 256u));
+  const uint32_t cells = std::max(1u, (window.size + cell - 1) / cell);
+  auto cell_of = [&](double at) { return uint32_t(std::clamp(std::floor(at / cell), 0.0, double(cells - 1))); };
+  // The cells' lists, packed (counts, then offsets, then entries).
+  std::vector<uint32_t> offsets(size_t(cells) * cells + 1, 0);
+  for (Box& box : boxes) box.x0 = cell_of(box.lo_u), box.y0 = cell_of(box.lo_v);
+  for (const Box& box : boxes)
+    for (uint32_t y = cell_of(box.lo_v); y <= cell_of(box.hi_v); ++y)
+      for (uint32_t x = cell_of(box.lo_u); x <= cell_of(box.hi_u); ++x) ++offsets[size_t(y) * cells + x + 1];
+  for (size_t c = 1; c < offsets.size(); ++c) offsets[c] += offsets[c - 1];
+  std::vector<uint32_t> entries(offsets.back());
+  std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
+  for (uint32_t k = 0; k < boxes.size(); ++k)
+    for (uint32_t y = cell_of(boxes[k].lo_v); y <= cell_of(boxes[k].hi_v); ++y)
+      for (uint32_t x = cell_of(boxes[k].lo_u); x <= cell_of(boxes[k].hi_u); ++x)
+        entries[fill[size_t(y) * cells + x]++] = k;
+  for (uint32_t y = 0; y < cells; ++y)
+    for (uint32_t x = 0; x < cells; ++x) {
+      const size_t c = size_t(y) * cells + x;
+      for (uint32_t m = offsets[c]; m < offsets[c + 1]; ++m) {
+        const Box& a = boxes[entries[m]];
+        for (uint32_t n = m + 1; n < offsets[c + 1]; ++n) {
+          const Box& b = boxes[entries[n]];
+          if (a.lo_u > b.hi_u || b.lo_u > a.hi_u || a.lo_v > b.hi_v || b.lo_v > a.hi_v) continue;
+          if (std::max(a.x0, b.x0) != x || std::max(a.y0, b.y0) != y) continue;  // cell_of is monotone
+          visit(candidates[entries[m]], candidates[entries[n]]);
+        }
+      }
+    }
 }
 
 }  // namespace
 
-std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
+std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
                                      const TileIntervals& intervals, float exit_margin, SecondLayerCapCounts* counts,
                                      std::vector<float> storage) {
   const uint32_t size = scene.layout().tile_size();
@@ -327,7 +385,7 @@ std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& sc
   const double same_surface = second_layer::kSameSurface * kEpsilonShrink;
   const double floor_offset =
       second_layer::near_cover_offset(coplanar_epsilon) - coplanar_epsilon * (1 - kEpsilonShrink);
-  Polygon covered, region;
+  Polygon covered, region, scratch;
   // Could `region` (every point at least `shallowest` deep) lower a cap? Counts the skip if not.
   auto region_matters = [&](double& shallowest) {
     double lo_u = region.at[0].u, hi_u = lo_u, lo_v = region.at[0].v, hi_v = lo_v;
@@ -341,18 +399,42 @@ std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& sc
     ++local.skipped;
     return false;
   };
+
   auto lower_by_region = [&](const Prepared& back, const Prepared& front) {
     if (!(back.zmax > front.zmin + same_surface)) return;  // nowhere behind it
+    // Every point the clips keep lies in this box (on `back`, inside `front`'s widened footprint),
+    // and on `back`'s plane, so the depth gap back - front there is within the gap's range over the
+    // box's corners (a linear function), give or take the slack for rounding.
+    const double lo_u = std::max(back.lo_u, front.reach_lo_u), hi_u = std::min(back.hi_u, front.reach_hi_u);
+    const double lo_v = std::max(back.lo_v, front.reach_lo_v), hi_v = std::min(back.hi_v, front.reach_hi_v);
+    if (lo_u > hi_u || lo_v > hi_v) return;  // footprints apart
+    const double du = hi_u - lo_u, dv = hi_v - lo_v;
+    const double gap_gu = back.gu - front.gu, gap_gv = back.gv - front.gv;
+    const double gap_at_lo = back.depth_at(lo_u, lo_v) - front.depth_at(lo_u, lo_v);
+    const double gap_most = gap_at_lo + std::max(gap_gu * du, 0.0) + std::max(gap_gv * dv, 0.0);
+    const double gap_least = gap_at_lo + std::min(gap_gu * du, 0.0) + std::min(gap_gv * dv, 0.0);
+    const double back_least = back.depth_at(lo_u, lo_v) + std::min(back.gu * du, 0.0) + std::min(back.gv * dv, 0.0);
+    const double front_least = front.depth_at(lo_u, lo_v) + std::min(front.gu * du, 0.0) + std::min(front.gv * dv, 0.0);
+    const double slack = 1e-9 * (1 +
+                                 (std::fabs(back.gu) + std::fabs(front.gu)) *
+                                     (du + std::fabs(lo_u - back.p[0].u) + std::fabs(lo_u - front.p[0].u)) +
+                                 (std::fabs(back.gv) + std::fabs(front.gv)) *
+                                     (dv + std::fabs(lo_v - back.p[0].v) + std::fabs(lo_v - front.p[0].v)));
+    if (!(gap_most + slack > same_surface)) {  // `back` is nowhere behind `front` where they overlap
+      ++local.skipped;
+      return;
+    }
     // Every point of either region is at least this deep: behind `front`, and on `back`.
-    const double bound = std::max(back.zmin, front.zmin + same_surface);
+    const double bound = std::max({back.zmin, front.zmin + same_surface, back_least - slack,
+                                   std::min(front_least + same_surface, back.zmax) - slack});
     if (!matters(bound, std::max(back.lo_u, front.lo_u) - 1, std::min(back.hi_u, front.hi_u) + 1,
                  std::max(back.lo_v, front.lo_v) - 1, std::min(back.hi_v, front.hi_v) + 1)) {
       ++local.skipped;
       return;
     }
     // Near cover needs a point of `back` at or below some texel's floor in the pair's box.
-    const bool behind_by_epsilon = back.zmax > front.zmin + epsilon;
-    const bool near = back.zmin <= front.zmax + epsilon &&
+    const bool behind_by_epsilon = back.zmax > front.zmin + epsilon && gap_most + slack > epsilon;
+    const bool near = back.zmin <= front.zmax + epsilon && gap_least - slack <= epsilon &&
                       back.zmax >= double(smallest_lower(std::max(back.lo_u, front.lo_u) - 1,
                                                          std::min(back.hi_u, front.hi_u) + 1,
                                                          std::max(back.lo_v, front.lo_v) - 1,
@@ -363,26 +445,26 @@ std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& sc
     }
     ++local.pairs_tested;
     double shallowest = 0;
-    if (!covered_by(back, front, covered)) return;
+    if (!covered_by(back, front, covered, scratch)) return;
     // Behind by epsilon: the second layer wherever it lies.
-    if (behind_by_epsilon && region_behind(covered, front, epsilon, kInfinity, region) &&
+    if (behind_by_epsilon && region_behind(covered, front, epsilon, kInfinity, region, scratch) &&
         region_matters(shallowest)) {
       ++local.regions;
       for (unsigned k = 1; k + 1 < region.count; ++k)
         lower_caps_by_triangle(region.at[0], region.at[k], region.at[k + 1], window, cap, &local.texels);
     }
     // Near cover: behind by less than epsilon, the second layer below each texel's lower + offset.
-    if (near && region_behind(covered, front, same_surface, epsilon, region) &&
+    if (near && region_behind(covered, front, same_surface, epsilon, region, scratch) &&
         region_matters(shallowest)) {
       ++local.near_regions;
       lower_caps_above_floor(region, window, intervals, floor_offset, exit_margin, cap);
     }
   };
   if (pyramid.back()[0] == kNothing) candidates.clear();  // no exit in the tile: nothing to cap
-  for (const auto& [i, j] : overlapping_pairs(device, prepared, candidates, window)) {
+  for_each_overlapping_pair(prepared, candidates, window, [&](uint32_t i, uint32_t j) {
     lower_by_region(prepared[i], prepared[j]);
     lower_by_region(prepared[j], prepared[i]);
-  }
+  });
   if (counts) {
     counts->pairs_tested += local.pairs_tested;
     counts->regions += local.regions;

@@ -5,7 +5,7 @@
 // them shadowed, wherever it sits in the texel. Any mesh counts, closed or not: a closed mesh's back
 // faces are behind its front faces; a floor under a one-sided roof is behind the roof.
 //
-// How: triangle pairs whose footprints overlap (Embree's rtcCollide on their boxes, each pair once) give
+// How: triangle pairs whose footprint boxes overlap (a uniform grid of the boxes, each pair once) give
 // the convex region of T behind T': T clipped by T''s edges and by z_T - z_T' >= epsilon, exactly in
 // double; and the near-cover region, z_T - z_T' in [kSameSurface, epsilon], which counts per texel
 // only below the texel's lower + second_layer::near_cover_offset (clipped per texel by that floor). Each region's triangle fan lowers the caps of the texels it touches through
@@ -13,14 +13,17 @@
 // widened by 2^-20 texels and the epsilon narrowed by 2^-20 of itself so that the region found here
 // contains the exact one despite rounding: the caps are never above verify's brute-force reference.
 // Edge-on triangles (second_layer::edge_on) cover no area: they hide nothing and cap by their own
-// shallowest point.
+// shallowest point. A pair is dropped before any clipping when an edge of either triangle separates
+// them, or when `back`'s plane lies nowhere behind `front`'s over the box the clips could keep (the
+// depth gap is linear, so its corners bound it): the regions found are the same.
+// Why not Embree's rtcCollide: it hands pairs to a callback under a lock on worker threads, and a
+// city tile has tens of millions of pairs; the grid visits them in place (honolulu 16K: caps
+// thread-seconds 8.4 -> 5.4, stores byte-identical).
 // Thread safety: pure function.
 #pragma once
 
 #include <cstdint>
 #include <vector>
-
-#include <embree3/rtcore.h>
 
 #include "builder/depth_interval.hpp"
 #include "builder/light_space_scene.hpp"
@@ -43,7 +46,7 @@ struct SecondLayerCapCounts {
 // texel's upper there (texels without an exit have nothing to cap). The caps are then exact only
 // where they matter; apply_exit_caps gives the same intervals as with every region.
 // `storage`: a buffer to reuse (as receiver_surface_caps).
-std::vector<float> second_layer_caps(RTCDevice device, const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
+std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
                                      const TileIntervals& intervals, float exit_margin,
                                      SecondLayerCapCounts* counts = nullptr, std::vector<float> storage = {});
 
