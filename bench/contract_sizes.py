@@ -8,6 +8,7 @@ keeps that block when it rewrites the report).
         --methods raw,mh,mmh,dagmh,cpvs,sst --receivers anywhere,surfaces --out out/contracts-4k.json
     python3 bench/contract_sizes.py out/contracts-4k.json [more runs] [--md BENCHMARKS.md]
         [--build-time out/build-time-16k.json]
+    python3 bench/contract_sizes.py --build-time out/build-time-16k.json   # the wall/rays column only
 
 CPVS is built from the same intervals, so under `surfaces` it is CPVS under the same contract.
 Runs made with --accuracy N add the error table (false lit / false shadowed per method against Embree
@@ -170,7 +171,8 @@ def error_table(entries, kept_rows=(), kept_counts=()):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("runs", nargs="+", help="JSON files written by bench/build_sizes.py --receivers ...")
+    ap.add_argument("runs", nargs="*", help="JSON files written by bench/build_sizes.py --receivers ... (none: "
+                    "only the wall/rays column is refreshed, from --build-time, every size row kept)")
     ap.add_argument("--md", default="BENCHMARKS.md", help="report to update (the block is appended if missing)")
     ap.add_argument("--build-time", nargs="*", default=[], help="runs of --methods mh,mmh,dagmh for the wall/rays column")
     args = ap.parse_args()
@@ -189,8 +191,8 @@ def main():
     commits = []
     entries = read(args.runs, commits)
     build_time = read(args.build_time, commits)
-    if not entries:
-        sys.exit("no builds in " + ", ".join(args.runs))
+    if not entries and not build_time:
+        sys.exit("no builds in " + ", ".join(args.runs + args.build_time))
     with open(args.md) as f:
         text = f.read()
     pattern = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END), re.S)
