@@ -150,6 +150,13 @@ bool make_interior_plane(const LightSpacePoint& a, const LightSpacePoint& b, con
   return std::isfinite(plane.eps);
 }
 
+// True when the point lies inside the triangle by kMargin (every edge's margin test holds).
+bool inside_by_margin(const InteriorPlane& plane, double u, double v) {
+  for (const EdgeTest& e : plane.edges)
+    if (!(e.A * (u - e.pu) + e.B * (v - e.pv) >= e.threshold)) return false;
+  return true;
+}
+
 // Texels [first, last] of row sv whose squares lie inside the triangle by kMargin (empty: first > last).
 void interior_span(const InteriorPlane& plane, double sv, double u0, double& first, double& last) {
   double lo_su = -kInf, hi_su = kInf;  // allowed square origins
@@ -201,6 +208,22 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
       ++local.already_lower;
       return;
     }
+    if (has_interior) {
+      // The square's shallowest corner on the plane, when it lies inside the triangle by the margin,
+      // is the shallowest point of the triangle in the square: the closed form, as for the interior
+      // texels (same error bound: the clipped polygon holds that corner, all its vertices within
+      // rounding of the plane), where it is not too close to a float rounding boundary to call.
+      const double cu = su + (plane.gu > 0 ? 0.0 : 1.0), cv = sv + (plane.gv > 0 ? 0.0 : 1.0);
+      if (inside_by_margin(plane, cu, cv)) {
+        const double x = a.depth + plane.gv * (cv - a.v) + plane.gu * (cu - a.u);
+        const float below = float(x - plane.eps), above = float(x + plane.eps);
+        if (below == above) {
+          slot = std::min(slot, below);
+          ++local.corner;
+          return;
+        }
+      }
+    }
     slot = std::min(slot, float(clipped_shallowest(a, b, c, box, su, sv)));
   };
   for (uint32_t j = j0; j <= j1; ++j) {
@@ -245,6 +268,7 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
     counts->interior += local.interior;
     counts->fallback += local.fallback;
     counts->already_lower += local.already_lower;
+    counts->corner += local.corner;
   }
 }
 

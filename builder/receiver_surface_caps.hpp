@@ -32,6 +32,8 @@ struct ReceiverCapCounts {
                            // boundary to be sure, clipped instead (counted in `interior` too)
   uint64_t already_lower = 0;  // of those to clip, texels whose cap was already at or below the
                                // triangle's shallowest vertex: left as they were, unclipped
+  uint64_t corner = 0;         // of those to clip (counted in `clipped`), texels whose shallowest
+                               // square corner lies inside the triangle: closed form, unclipped
 };
 
 // A square window of texels: texel (i, j) covers global texels [u0 + i, u0 + i + 1] x [v0 + j, ...].
