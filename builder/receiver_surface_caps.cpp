@@ -157,6 +157,40 @@ bool inside_by_margin(const InteriorPlane& plane, double u, double v) {
   return true;
 }
 
+// When exactly one edge of the triangle reaches the square (the other two clear of it by kMargin) and
+// the square's shallowest corner (cu, cv) lies outside that edge by kMargin, the triangle's shallowest
+// point in the square lies on the edge's chord through the square: the segment from any point of
+// their intersection to the corner crosses the chord, and the plane only falls along it. So `x` is the
+// plane's value at one end of the chord. False when the texel is not such a case.
+bool chord_shallowest(const InteriorPlane& plane, const std::array<const LightSpacePoint*, 3>& tri, double su,
+                      double sv, double cu, double cv, double& x) {
+  int crossing = -1;
+  for (int k = 0; k < 3; ++k) {
+    const EdgeTest& e = plane.edges[k];
+    const double least = e.A * ((e.A >= 0 ? su : su + 1) - e.pu) + e.B * ((e.B >= 0 ? sv : sv + 1) - e.pv);
+    if (least >= e.threshold) continue;  // the square lies inside this edge
+    if (crossing >= 0) return false;     // a second edge reaches it
+    crossing = k;
+  }
+  if (crossing < 0) return false;
+  const EdgeTest& e = plane.edges[crossing];
+  if (!(e.A * (cu - e.pu) + e.B * (cv - e.pv) <= -e.threshold)) return false;
+  const LightSpacePoint& p = *tri[crossing];
+  const LightSpacePoint& q = *tri[(crossing + 1) % 3];
+  double t0 = -kInf, t1 = kInf;  // the edge's line p + t (q - p) inside the square (Liang-Barsky)
+  auto slab = [&](double from, double delta, double lo, double hi) {
+    if (delta == 0) return from >= lo && from <= hi;
+    double ta = (lo - from) / delta, tb = (hi - from) / delta;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta), t1 = std::min(t1, tb);
+    return true;
+  };
+  if (!slab(p.u, q.u - p.u, su, su + 1) || !slab(p.v, q.v - p.v, sv, sv + 1) || !(t0 <= t1)) return false;
+  const double rise = q.depth - p.depth;
+  x = p.depth + (rise > 0 ? t0 : t1) * rise;
+  return true;
+}
+
 // Texels [first, last] of row sv whose squares lie inside the triangle by kMargin (empty: first > last).
 void interior_span(const InteriorPlane& plane, double sv, double u0, double& first, double& last) {
   double lo_su = -kInf, hi_su = kInf;  // allowed square origins
@@ -222,6 +256,13 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
           ++local.corner;
           return;
         }
+      } else if (double x; chord_shallowest(plane, tri, su, sv, cu, cv, x)) {
+        const float below = float(x - plane.eps), above = float(x + plane.eps);
+        if (below == above) {
+          slot = std::min(slot, below);
+          ++local.chord;
+          return;
+        }
       }
     }
     slot = std::min(slot, float(clipped_shallowest(a, b, c, box, su, sv)));
@@ -269,6 +310,7 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
     counts->fallback += local.fallback;
     counts->already_lower += local.already_lower;
     counts->corner += local.corner;
+    counts->chord += local.chord;
   }
 }
 

@@ -34,6 +34,7 @@ struct ReceiverCapCounts {
                                // triangle's shallowest vertex: left as they were, unclipped
   uint64_t corner = 0;         // of those to clip (counted in `clipped`), texels whose shallowest
                                // square corner lies inside the triangle: closed form, unclipped
+  uint64_t chord = 0;          // ... crossed by one edge only, that corner outside: the edge's chord
 };
 
 // A square window of texels: texel (i, j) covers global texels [u0 + i, u0 + i + 1] x [v0 + j, ...].

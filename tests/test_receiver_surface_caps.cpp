@@ -57,6 +57,7 @@ void expect_identical(const char* what, int count, const TexelWindow& window, Ma
     total->interior += counts.interior;
     total->fallback += counts.fallback;
     total->corner += counts.corner;
+    total->chord += counts.chord;
   }
 }
 
@@ -116,9 +117,11 @@ TEST(ReceiverSurfaceCaps, RandomTrianglesOfAllSizesMatchTheClipping) {
   EXPECT_LT(counts.fallback * 100, counts.interior);
   // Edge texels whose shallowest corner is inside take the closed form too, and still match.
   EXPECT_GT(counts.corner * 4, counts.clipped);
-  std::printf("clipped %llu (closed form at a corner %llu), interior %llu, fallback %llu\n",
+  EXPECT_GT(counts.chord * 4, counts.clipped);
+  std::printf("clipped %llu (closed form at a corner %llu, on a chord %llu), interior %llu, fallback %llu\n",
               (unsigned long long)counts.clipped, (unsigned long long)counts.corner,
-              (unsigned long long)counts.interior, (unsigned long long)counts.fallback);
+              (unsigned long long)counts.chord, (unsigned long long)counts.interior,
+              (unsigned long long)counts.fallback);
 }
 
 TEST(ReceiverSurfaceCaps, SliversAndDegenerateTrianglesMatchTheClipping) {
