@@ -19,6 +19,11 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 //   plane's exact value at the shallowest corner, and so is the closed form. Where x - eps and x + eps
 //   round to the same float, every value between them does (rounding is monotone), the clipping's
 //   included; elsewhere the texel is clipped. eps is ~200x the error analysis' bound (kEpsScale).
+// - Edge texels take the same closed form where the exact minimum is a point the clipping computes
+//   within the same rounding: the shallowest corner when it lies inside the triangle by kMargin, or,
+//   where one edge only reaches the square and that corner lies outside it by kMargin, the shallower
+//   end of the edge's chord through the square (chord_shallowest). The tests compare every path with
+//   the clipping bit for bit.
 constexpr double kMargin = 1.0 / (1 << 20);      // texels
 constexpr double kEpsScale = 1.0 / (1ull << 40);  // relative to the magnitudes the errors scale with
 
@@ -150,6 +155,14 @@ bool make_interior_plane(const LightSpacePoint& a, const LightSpacePoint& b, con
   return std::isfinite(plane.eps);
 }
 
+// The float that every value within eps of x rounds to, when they all round alike (rounding is
+// monotone, so x - eps and x + eps decide); false when x is too close to a rounding boundary to call.
+bool sure_float(double x, double eps, float& value) {
+  const float below = float(x - eps), above = float(x + eps);
+  value = below;
+  return below == above;
+}
+
 // True when the point lies inside the triangle by kMargin (every edge's margin test holds).
 bool inside_by_margin(const InteriorPlane& plane, double u, double v) {
   for (const EdgeTest& e : plane.edges)
@@ -248,21 +261,17 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
       // texels (same error bound: the clipped polygon holds that corner, all its vertices within
       // rounding of the plane), where it is not too close to a float rounding boundary to call.
       const double cu = su + (plane.gu > 0 ? 0.0 : 1.0), cv = sv + (plane.gv > 0 ? 0.0 : 1.0);
+      float value;
       if (inside_by_margin(plane, cu, cv)) {
-        const double x = a.depth + plane.gv * (cv - a.v) + plane.gu * (cu - a.u);
-        const float below = float(x - plane.eps), above = float(x + plane.eps);
-        if (below == above) {
-          slot = std::min(slot, below);
+        if (sure_float(a.depth + plane.gv * (cv - a.v) + plane.gu * (cu - a.u), plane.eps, value)) {
+          slot = std::min(slot, value);
           ++local.corner;
           return;
         }
-      } else if (double x; chord_shallowest(plane, tri, su, sv, cu, cv, x)) {
-        const float below = float(x - plane.eps), above = float(x + plane.eps);
-        if (below == above) {
-          slot = std::min(slot, below);
-          ++local.chord;
-          return;
-        }
+      } else if (double x; chord_shallowest(plane, tri, su, sv, cu, cv, x) && sure_float(x, plane.eps, value)) {
+        slot = std::min(slot, value);
+        ++local.chord;
+        return;
       }
     }
     slot = std::min(slot, float(clipped_shallowest(a, b, c, box, su, sv)));
@@ -290,10 +299,8 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
       const double row_depth = a.depth + plane.gv * (cv - a.v);
       float* row = &cap[size_t(j) * size];
       for (uint32_t i = in_first; i < in_end; ++i) {
-        const double x = row_depth + plane.gu * ((u0 + i) + du - a.u);
-        const float below = float(x - plane.eps), above = float(x + plane.eps);
-        if (below == above) {
-          row[i] = std::min(row[i], below);
+        if (float value; sure_float(row_depth + plane.gu * ((u0 + i) + du - a.u), plane.eps, value)) {
+          row[i] = std::min(row[i], value);
         } else {
           clip_texel(i, j, u0 + i, sv);
           ++local.fallback;
