@@ -240,14 +240,14 @@ void for_each_overlapping_pair(const std::vector<Prepared>& prepared, const std:
   constexpr double kPad = 1.0 / 256;
   struct Box {
     double lo_u, hi_u, lo_v, hi_v;
-    uint32_t x0, y0;  // the cell of (lo_u, lo_v)
+    uint32_t x0, x1, y0, y1;  // the cells it touches
   };
   std::vector<Box> boxes(candidates.size());
   double extent = 0;
   for (size_t k = 0; k < candidates.size(); ++k) {
     const Prepared& t = prepared[candidates[k]];
     const double u = window.u0, v = window.v0;
-    boxes[k] = {t.lo_u - u - kPad, t.hi_u - u + kPad, t.lo_v - v - kPad, t.hi_v - v + kPad, 0, 0};
+    boxes[k] = {t.lo_u - u - kPad, t.hi_u - u + kPad, t.lo_v - v - kPad, t.hi_v - v + kPad, 0, 0, 0, 0};
     extent += std::min(boxes[k].hi_u - boxes[k].lo_u, double(window.size)) +
               std::min(boxes[k].hi_v - boxes[k].lo_v, double(window.size));
   }
@@ -258,17 +258,17 @@ void for_each_overlapping_pair(const std::vector<Prepared>& prepared, const std:
   auto cell_of = [&](double at) { return uint32_t(std::clamp(std::floor(at / cell), 0.0, double(cells - 1))); };
   // The cells' lists, packed (counts, then offsets, then entries).
   std::vector<uint32_t> offsets(size_t(cells) * cells + 1, 0);
-  for (Box& box : boxes) box.x0 = cell_of(box.lo_u), box.y0 = cell_of(box.lo_v);
-  for (const Box& box : boxes)
-    for (uint32_t y = cell_of(box.lo_v); y <= cell_of(box.hi_v); ++y)
-      for (uint32_t x = cell_of(box.lo_u); x <= cell_of(box.hi_u); ++x) ++offsets[size_t(y) * cells + x + 1];
+  for (Box& box : boxes) {
+    box.x0 = cell_of(box.lo_u), box.x1 = cell_of(box.hi_u), box.y0 = cell_of(box.lo_v), box.y1 = cell_of(box.hi_v);
+    for (uint32_t y = box.y0; y <= box.y1; ++y)
+      for (uint32_t x = box.x0; x <= box.x1; ++x) ++offsets[size_t(y) * cells + x + 1];
+  }
   for (size_t c = 1; c < offsets.size(); ++c) offsets[c] += offsets[c - 1];
   std::vector<uint32_t> entries(offsets.back());
   std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
   for (uint32_t k = 0; k < boxes.size(); ++k)
-    for (uint32_t y = cell_of(boxes[k].lo_v); y <= cell_of(boxes[k].hi_v); ++y)
-      for (uint32_t x = cell_of(boxes[k].lo_u); x <= cell_of(boxes[k].hi_u); ++x)
-        entries[fill[size_t(y) * cells + x]++] = k;
+    for (uint32_t y = boxes[k].y0; y <= boxes[k].y1; ++y)
+      for (uint32_t x = boxes[k].x0; x <= boxes[k].x1; ++x) entries[fill[size_t(y) * cells + x]++] = k;
   for (uint32_t y = 0; y < cells; ++y)
     for (uint32_t x = 0; x < cells; ++x) {
       const size_t c = size_t(y) * cells + x;
@@ -410,11 +410,12 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
     if (lo_u > hi_u || lo_v > hi_v) return;  // footprints apart
     const double du = hi_u - lo_u, dv = hi_v - lo_v;
     const double gap_gu = back.gu - front.gu, gap_gv = back.gv - front.gv;
-    const double gap_at_lo = back.depth_at(lo_u, lo_v) - front.depth_at(lo_u, lo_v);
+    const double back_at_lo = back.depth_at(lo_u, lo_v), front_at_lo = front.depth_at(lo_u, lo_v);
+    const double gap_at_lo = back_at_lo - front_at_lo;
     const double gap_most = gap_at_lo + std::max(gap_gu * du, 0.0) + std::max(gap_gv * dv, 0.0);
     const double gap_least = gap_at_lo + std::min(gap_gu * du, 0.0) + std::min(gap_gv * dv, 0.0);
-    const double back_least = back.depth_at(lo_u, lo_v) + std::min(back.gu * du, 0.0) + std::min(back.gv * dv, 0.0);
-    const double front_least = front.depth_at(lo_u, lo_v) + std::min(front.gu * du, 0.0) + std::min(front.gv * dv, 0.0);
+    const double back_least = back_at_lo + std::min(back.gu * du, 0.0) + std::min(back.gv * dv, 0.0);
+    const double front_least = front_at_lo + std::min(front.gu * du, 0.0) + std::min(front.gv * dv, 0.0);
     const double slack = 1e-9 * (1 +
                                  (std::fabs(back.gu) + std::fabs(front.gu)) *
                                      (du + std::fabs(lo_u - back.p[0].u) + std::fabs(lo_u - front.p[0].u)) +
@@ -427,18 +428,17 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
     // Every point of either region is at least this deep: behind `front`, and on `back`.
     const double bound = std::max({back.zmin, front.zmin + same_surface, back_least - slack,
                                    std::min(front_least + same_surface, back.zmax) - slack});
-    if (!matters(bound, std::max(back.lo_u, front.lo_u) - 1, std::min(back.hi_u, front.hi_u) + 1,
-                 std::max(back.lo_v, front.lo_v) - 1, std::min(back.hi_v, front.hi_v) + 1)) {
+    // The pair's footprint boxes' overlap, a texel wider each way, for the pyramids.
+    const double box_lo_u = std::max(back.lo_u, front.lo_u) - 1, box_hi_u = std::min(back.hi_u, front.hi_u) + 1;
+    const double box_lo_v = std::max(back.lo_v, front.lo_v) - 1, box_hi_v = std::min(back.hi_v, front.hi_v) + 1;
+    if (!matters(bound, box_lo_u, box_hi_u, box_lo_v, box_hi_v)) {
       ++local.skipped;
       return;
     }
     // Near cover needs a point of `back` at or below some texel's floor in the pair's box.
     const bool behind_by_epsilon = back.zmax > front.zmin + epsilon && gap_most + slack > epsilon;
     const bool near = back.zmin <= front.zmax + epsilon && gap_least - slack <= epsilon &&
-                      back.zmax >= double(smallest_lower(std::max(back.lo_u, front.lo_u) - 1,
-                                                         std::min(back.hi_u, front.hi_u) + 1,
-                                                         std::max(back.lo_v, front.lo_v) - 1,
-                                                         std::min(back.hi_v, front.hi_v) + 1)) + floor_offset;
+                      back.zmax >= double(smallest_lower(box_lo_u, box_hi_u, box_lo_v, box_hi_v)) + floor_offset;
     if (!behind_by_epsilon && !near) {
       ++local.skipped;
       return;
