@@ -129,6 +129,15 @@ MhHierarchy compact(const MhHierarchy& h) {
   if (h.root_mask == 0) return out;
   std::vector<uint32_t> id(h.block_count(), kNone), order{h.root_block};
   id[h.root_block] = 0;
+  // The input's sizes bound the output's: reserved, the arrays are written once instead of grown
+  // by doubling (each growth copied them and faulted in fresh pages: 7 % of an MMH build's CPU on a
+  // full-depth tree).
+  order.reserve(h.block_count());
+  out.block_mask.reserve(h.block_count());
+  out.block_first_child.reserve(h.block_count());
+  out.block_first_value.reserve(h.block_count());
+  out.child_block.reserve(h.child_block.size());
+  out.intervals.reserve(h.intervals.size());
   for (size_t k = 0; k < order.size(); ++k) {
     const uint32_t b = order[k];
     const uint8_t mask = h.block_mask[b];
