@@ -1,7 +1,7 @@
 // ShadowMap::query_batch (declared in client/shadow_map.hpp). Three parallel phases:
-//   A. per chunk of points: light-space transform, Morton key of the texel, biased depth, and a
+//   A. per chunk of points (workers claim chunks): light-space transform, Morton key of the texel, biased depth, and a
 //      histogram of the keys' top bits (buckets; points off the map go to an extra last bucket);
-//   B. per chunk: stable scatter into the buckets (one counting-sort pass over the whole batch);
+//   B. per claimed chunk: stable scatter into the buckets (one counting-sort pass over the whole batch);
 //   C. workers claim buckets: order the bucket's low key bits in cache (counting passes on the top
 //      digits only, sort_low_bits), then walk its runs
 //      of points per tile: the tile is looked up once per run, point queries go to the decoder's
@@ -116,8 +116,23 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
     return key == kOffMap ? buckets : size_t(keys.code(key) >> low_bits);
   };
 
+  // Every pass's workers claim work (chunks, then buckets) instead of taking equal shares: on a
+  // shared host one core can run a third slower than the other (fzk_haus 16384², 1M points, one
+  // thread: 26 and 38 M points/s pinned to either core in the same minute), and equal shares wait
+  // for the slower one.
+  const unsigned workers = options.parallel_for ? unsigned(std::min<size_t>(buckets, 64))
+                                                : (options.threads ? options.threads
+                                                                   : std::max(1u, std::thread::hardware_concurrency()));
+  std::atomic<size_t> next_chunk{0};
+  auto claim_chunks = [&](const std::function<void(size_t, size_t)>& pass) {
+    next_chunk = 0;
+    parallel_for(std::min<size_t>(workers, chunks), [&](size_t, size_t) {
+      for (size_t c; !failed && (c = next_chunk.fetch_add(1, std::memory_order_relaxed)) < chunks;) pass(c, c + 1);
+    });
+  };
+
   // A: transform, key, histogram.
-  parallel_for(chunks, [&](size_t c0, size_t c1) {
+  claim_chunks([&](size_t c0, size_t c1) {
     // Locals, not captures by reference: the histogram's stores could alias captured values, which
     // would be reloaded per point.
     const LightFrame frame = frame_;
@@ -165,7 +180,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
     }
   }
   // B: scatter.
-  parallel_for(chunks, [&](size_t c0, size_t c1) {
+  claim_chunks([&](size_t c0, size_t c1) {
     for (size_t c = c0; c < c1; ++c) {
       uint32_t* offset = &histogram[c * (buckets + 1)];
       for (size_t i = c * points_per_chunk, end = std::min(n, i + points_per_chunk); i < end; ++i)
@@ -180,9 +195,6 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   const uint32_t tile_mask = layout_.tile_size() - 1;
   const double k2 = double(kernel) * kernel;
   std::atomic<size_t> next_bucket{0};
-  const unsigned workers = options.parallel_for ? unsigned(std::min<size_t>(buckets, 64))
-                                                : (options.threads ? options.threads
-                                                                   : std::max(1u, std::thread::hardware_concurrency()));
   parallel_for(workers, [&](size_t, size_t) {
     std::shared_ptr<const DecodedTile> tile;  // this worker's current tile (one lookup per run)
     uint64_t tile_id = kOffMap;
