@@ -1,7 +1,8 @@
 // ShadowMap::query_batch (declared in client/shadow_map.hpp). Three parallel phases:
-//   A. per chunk of points (workers claim chunks): light-space transform, Morton key of the texel, biased depth, and a
-//      histogram of the keys' top bits (buckets; points off the map go to an extra last bucket);
-//   B. per claimed chunk: stable scatter into the buckets (one counting-sort pass over the whole batch);
+//   A. per chunk of points (workers claim chunks): light-space transform, Morton key of the texel,
+//      biased depth, and a histogram of the keys' top bits (buckets; points off the map go to an
+//      extra last bucket);
+//   B. per claimed chunk: stable scatter into the buckets (one counting-sort pass over the batch);
 //   C. workers claim buckets: order the bucket's low key bits in cache (counting passes on the top
 //      digits only, sort_low_bits), then walk its runs
 //      of points per tile: the tile is looked up once per run, point queries go to the decoder's
