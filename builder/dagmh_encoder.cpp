@@ -11,6 +11,7 @@
 
 #include "codec/dagmh_format.hpp"
 #include "codec/mh_format.hpp"
+#include "common/isa_clones.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -239,16 +240,26 @@ bool try_grid(const std::vector<DepthInterval>& d, const GridEnds& ends, unsigne
   return true;
 }
 
-Status encode_chunk(const DepthInterval* iv, unsigned n, std::vector<uint8_t>& out) {
-  // Representative: the lower bound contained in the most intervals (ties: first).
+// The chunk's representative: the index of the lower bound contained in the most intervals (ties:
+// the first). Every pair is tested (n <= kMaxChunkSize): the bounds are copied apart first so the
+// inner loop runs over two plain float arrays without a branch, which the compiler vectorises (in
+// the x86-64-v3 copy 8 intervals an instruction). It was a third of the chunk coder's time on a
+// full-depth tree (fzk_haus 16384² `anywhere`, perf); DAG-MH encode 7.6-8.2 -> 7.4-7.5 thread-s.
+SHADOWTILES_ISA_CLONES unsigned representative_index(const DepthInterval* iv, unsigned n) {
+  float lower[F::kMaxChunkSize], upper[F::kMaxChunkSize];
+  for (unsigned j = 0; j < n; ++j) lower[j] = iv[j].lower, upper[j] = iv[j].upper;
   unsigned best = 0, best_count = 0;
   for (unsigned i = 0; i < n; ++i) {
-    const float x = iv[i].lower;
-    unsigned c = 0;  // iv[j].contains(x) without its branch, which mispredicted on every chunk
-    for (unsigned j = 0; j < n; ++j) c += unsigned(x >= iv[j].lower) & unsigned(x <= iv[j].upper);
+    const float x = lower[i];
+    unsigned c = 0;  // DepthInterval::contains(x)
+    for (unsigned j = 0; j < n; ++j) c += unsigned(x >= lower[j]) & unsigned(x <= upper[j]);
     if (c > best_count) best = i, best_count = c;
   }
-  const float rep = iv[best].lower;
+  return best;
+}
+
+Status encode_chunk(const DepthInterval* iv, unsigned n, std::vector<uint8_t>& out) {
+  const float rep = iv[representative_index(iv, n)].lower;
   if (!std::isfinite(rep)) return invalid("non-finite interval bound");
   put_f32(out, rep);
   std::vector<uint8_t> bitmap(F::bitmap_bytes(n), 0);
