@@ -215,7 +215,8 @@ Result<MhTileView> MhTileView::parse(std::span<const uint8_t> payload, const MhP
     // Heights in reverse offset order (children lie at higher offsets): the deepest node must not
     // go below the texel level, which bounds every walk by the level count. A block's entry of
     // `mask_at` is read for the last time just before it is overwritten with the block's height, so
-    // the entries of its children, all after it, already hold theirs.
+    // the entries of its children, all after it, already hold theirs (every reference is a block
+    // start: the count above).
     std::vector<uint8_t>& height_at = mask_at;
     for (size_t b = blocks.size(); b-- > 0;) {
       const Block& block = blocks[b];
