@@ -1,12 +1,11 @@
 // `shadowtiles build SCENE --out STORE ...`: bake the sun's shadows of a scene into a store.
-#include <malloc.h>
-
 #include <cstdio>
 #include <iostream>
 
 #include <spdlog/spdlog.h>
 
 #include "builder/build_job.hpp"
+#include "cli/batch_allocator.hpp"
 #include "cli/cli_parsing.hpp"
 #include "cli/commands.hpp"
 #include "cli/exit_codes.hpp"
@@ -86,21 +85,7 @@ int run(const BuildFlags& flags) {
   config.report_tile_costs = flags.tile_costs;
   if (flags.out.empty() && !flags.plan_shards) { spdlog::error("--out is required"); return kInvalidInput; }
   config.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
-  // Every tile allocates and frees the same large buffers (its hierarchies, the MMH merge's copy and
-  // compacted tree, payloads: tens of MiB each on a full-depth tree). glibc maps blocks over its
-  // threshold (32 MiB at most) afresh each time and trims freed heap, so each tile faulted zeroed
-  // pages in again: on fzk_haus 16384² `anywhere` 1.1 M page faults and 14 % of the CPU. Kept in
-  // the heap, they are reused. One arena for the workers too: a worker's own arena is made of
-  // 64 MiB heaps that glibc unmaps as soon as one is empty, whatever the trim threshold, and its
-  // blocks over 64 MiB are mapped afresh; the main arena grows without either. Against glibc's
-  // defaults: wall 0.75x with the first two settings (peak RSS 832 -> 919 MiB), then 0.70x of that
-  // with one arena (peak 886 -> 793 MiB); dragon `surfaces`, whose tiles allocate little, 0.99x.
-  // A build is a batch job, so keeping freed memory costs nobody. The one arena's lock is taken
-  // rarely: blocks over 1 KiB are a few hundred per tile (counted: 260 on dragon `surfaces`, ~600 on
-  // fzk_haus `anywhere`), and most small ones come from each thread's cache (tcache) without it.
-  mallopt(M_MMAP_MAX, 0);
-  mallopt(M_TRIM_THRESHOLD, 1 << 30);
-  mallopt(M_ARENA_MAX, 1);
+  keep_freed_memory_for_reuse();  // tile after tile, the same large buffers (cli/batch_allocator.hpp)
 
   auto summary = run_build(config);
   if (!summary) {

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include "cli/batch_allocator.hpp"
 #include "cli/commands.hpp"
 #include "cli/exit_codes.hpp"
 #include "codec/decoded_tile.hpp"
@@ -52,6 +53,7 @@ void add_parts(std::vector<DecodedTile::SizePart>& sum, const std::vector<Decode
 }
 
 int run(const InspectFlags& flags) {
+  keep_freed_memory_for_reuse();  // every tile is decoded in turn (cli/batch_allocator.hpp)
   auto opened = store::Store::open(flags.store, {});
   if (!opened) { spdlog::error("cannot open store: {}", opened.error().message); return exit_code_for(opened.error()); }
   auto raw_meta = (*opened)->get(store::Database::meta, store::as_bytes(kMetaBuildKey));
