@@ -1,5 +1,6 @@
 #include "cli/batch_allocator.hpp"
 
+#include <algorithm>
 #include <cstdlib>  // defines __GLIBC__ on glibc (tested below)
 
 #if defined(__GLIBC__)
@@ -26,6 +27,19 @@ void keep_freed_memory_for_reuse() {
   mallopt(M_MMAP_MAX, 0);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
   mallopt(M_ARENA_MAX, 1);
+#endif
+}
+
+void keep_transaction_buffers_resident(uint64_t transaction_bytes) {
+#if defined(__GLIBC__)
+  // The merge allocates and frees blob-sized buffers (its chunks, LMDB's pages of each transaction)
+  // over and over; by default glibc hands blocks over its mmap threshold straight back to the kernel
+  // and trims the heap's top, so every transaction faulted fresh zeroed pages in again (a sixth of
+  // the merge's time in perf). Kept in the heap, they are reused.
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, int(std::min<uint64_t>(transaction_bytes * 4, 1ull << 30)));
+#else
+  (void)transaction_bytes;
 #endif
 }
 

@@ -1,13 +1,11 @@
 // `shadowtiles merge SHARD... --out STORE`: join the shard stores of a sharded build into one store.
-#include <malloc.h>
-
-#include <algorithm>
 #include <cstdio>
 #include <iostream>
 
 #include <spdlog/spdlog.h>
 
 #include "builder/shard_merge.hpp"
+#include "cli/batch_allocator.hpp"
 #include "cli/commands.hpp"
 #include "cli/exit_codes.hpp"
 
@@ -34,13 +32,7 @@ int run(const MergeFlags& flags) {
   config.overwrite = flags.overwrite;
   config.debug_kill_after_transactions = flags.kill_after;
   config.on_progress = [](const std::string& line) { spdlog::info("{}", line); };
-  // The merge allocates and frees blob-sized buffers (its chunks, LMDB's pages of each transaction)
-  // over and over; by default glibc hands blocks over its mmap threshold straight back to the kernel
-  // and trims the heap's top, so every transaction faulted fresh zeroed pages in again (a sixth of
-  // the merge's time in perf). Kept in the heap, they are reused; the heap's peak stays bounded by
-  // the transaction and chunk sizes, not the store's.
-  mallopt(M_MMAP_THRESHOLD, 32 << 20);
-  mallopt(M_TRIM_THRESHOLD, int(std::min<uint64_t>(config.transaction_bytes * 4, 1ull << 30)));
+  keep_transaction_buffers_resident(config.transaction_bytes);  // cli/batch_allocator.hpp
   auto summary = run_merge(config);
   if (!summary) {
     spdlog::error("merge failed ({}): {}", error_code_name(summary.error().code), summary.error().message);
