@@ -25,6 +25,13 @@ bool zero_area(const Vec3& a, const Vec3& b, const Vec3& c) {
   return !(std::sqrt(length2(n)) > kRelativeAreaEpsilon * longest2);
 }
 
+// Room for `extra` more elements, growing geometrically: a scene of many meshes appends one at a
+// time, and exact reserves would copy the whole array per mesh.
+template <typename T>
+void reserve_more(std::vector<T>& v, size_t extra) {
+  if (v.capacity() - v.size() < extra) v.reserve(std::max(v.size() + extra, 2 * v.capacity()));
+}
+
 }  // namespace
 
 const char* mesh_kind_name(MeshKind kind) {
@@ -63,6 +70,8 @@ uint64_t Scene::add_mesh(const std::string& name, const std::vector<Vec3>& mesh_
   //    in order.
   std::vector<uint32_t> used_index;  // dense used position -> mesh vertex
   std::vector<Vec3> used_positions;
+  used_index.reserve(n);
+  used_positions.reserve(n);
   std::vector<uint32_t> compact(n, 0);
   for (size_t i = 0; i < n; ++i)
     if (used[i]) {
@@ -82,6 +91,7 @@ uint64_t Scene::add_mesh(const std::string& name, const std::vector<Vec3>& mesh_
 
   const bool first_geometry = triangles.empty();
   const uint32_t base = uint32_t(vertices.size());
+  reserve_more(vertices, unique);
   for (size_t i = 0; i < weld.size() && unique > 0; ++i)
     if (weld[i] == vertices.size() - base) vertices.push_back(used_positions[i]);
 
@@ -100,6 +110,8 @@ uint64_t Scene::add_mesh(const std::string& name, const std::vector<Vec3>& mesh_
   }
 
   const uint32_t mesh_index = uint32_t(meshes.size());
+  reserve_more(triangles, kept.size());
+  reserve_more(triangle_mesh, kept.size());
   for (auto& t : kept) {
     triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
     triangle_mesh.push_back(mesh_index);

@@ -172,6 +172,7 @@ Result<Scene> convert(const aiScene& ai, const std::filesystem::path& file, Heig
       for (unsigned v = 0; v < mesh.mNumVertices; ++v)
         vertices.push_back(transform(item.world, mesh.mVertices[v]));
       uint64_t polygons = 0;  // left after aiProcess_Triangulate: should not happen; counted as dropped
+      triangles.reserve(mesh.mNumFaces);
       for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
         const aiFace& face = mesh.mFaces[f];
         if (face.mNumIndices < 3 || !face.mIndices) continue;  // points, lines
