@@ -39,6 +39,7 @@ MhHierarchy build_bottom_up(const TileIntervals& tile) {
     return to_hierarchy(std::move(dense));
   }
   constexpr float kInf = std::numeric_limits<float>::infinity();
+  constexpr size_t kPrefetchAhead = 64;  // parents: 4 blocks of 4x4
   std::vector<DepthInterval> child, parent;  // intervals of levels l+1 and l, dense, Morton order
   for (unsigned l = L; l-- > 0;) {
     const size_t n = size_t(1) << (2 * l);
@@ -50,6 +51,17 @@ MhHierarchy build_bottom_up(const TileIntervals& tile) {
     auto& valued = dense.valued[l + 1];
     for (size_t p = 0; p < n; ++p) {
       DepthInterval c[4];
+      if (bottom && p % 16 == 0 && p + kPrefetchAhead < n) {
+        // Morton order jumps between rows, which the hardware prefetcher does not follow: the loads
+        // of the texels waited on memory (a fifth of the build's time on dragon). Fetch the 8 rows
+        // of the 8x8-texel block that the 16 parents kPrefetchAhead on will read.
+        const DepthInterval* block =
+            &tile.texels[size_t(2 * morton_y(p + kPrefetchAhead)) * tile.size + 2 * morton_x(p + kPrefetchAhead)];
+        for (unsigned r = 0; r < 8; ++r) {
+          __builtin_prefetch(block + size_t(r) * tile.size);
+          __builtin_prefetch(block + size_t(r) * tile.size + 7);
+        }
+      }
       if (bottom) {  // texels straight from the row-major input: a 2x2 block
         const DepthInterval* row = &tile.texels[size_t(2 * morton_y(p)) * tile.size + 2 * morton_x(p)];
         c[0] = row[0], c[1] = row[1], c[2] = row[tile.size], c[3] = row[tile.size + 1];
