@@ -5,7 +5,8 @@
 // triangles, once in each direction. Welding matters because importers (assimp) split a vertex per
 // normal/uv, which would otherwise turn every hard edge or uv seam into two boundary edges.
 //
-// Cost: O(vertices + triangles) expected time (hash maps), O(vertices + edges) memory.
+// Cost: O(vertices + triangles) expected time (a hash map for welding, a radix sort for the edges),
+// O(vertices + edges) memory.
 // Errors: none; malformed triangles are skipped (see classify_mesh).
 // Thread safety: pure functions, safe to call concurrently.
 // Untrusted input: safe; indices are range-checked, non-finite positions are welded by bit pattern.
