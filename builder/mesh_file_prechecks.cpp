@@ -62,6 +62,18 @@ std::vector<std::string_view> split_words(std::string_view line) {
   return words;
 }
 
+// assimp 5.2 ends a text line at \r, \n, \f or NUL, and joins a line ending in a backslash with the
+// next; the checks read lines up to \n. A trailing \r (CRLF files) is dropped here; any other line
+// break inside a line, or a continuation, is named (nullptr: none), since the importer would read
+// that line otherwise than the check (found by fuzz_scene_loader: a \r inside a face line made
+// assimp read the text after it as a face of 88888888888888888888 vertices, gigabytes).
+const char* strip_line_end(std::string& line) {
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line.find_first_of("\r\f") != std::string::npos) return "a carriage return or form feed inside a line";
+  if (!line.empty() && line.back() == '\\') return "a line ending in a backslash (a continuation)";
+  return nullptr;
+}
+
 uint64_t saturating_mul_add(uint64_t sum, uint64_t count, uint64_t size) {
   if (size != 0 && count > (UINT64_MAX - sum) / size) return UINT64_MAX;
   return sum + count * size;
@@ -206,6 +218,11 @@ class PlyChecker {
         else if (words[1] == "binary_big_endian") header_.format = PlyFormat::binary_big_endian;
         else return fail(fmt::format("unknown format '{}'", words[1].substr(0, 32)));
       } else if (words[0] == "element" && words.size() > 2) {
+        // assimp 5.2 reads the count of an element whose name it does not know from the start of the
+        // name, not after it: "element 22222222222face 1" is 22 billion instances (found by
+        // fuzz_scene_loader: a 57 GB allocation). PLY names are identifiers; a leading digit is refused.
+        if (words[1][0] >= '0' && words[1][0] <= '9')
+          return fail(fmt::format("element name '{}' starts with a digit", words[1].substr(0, 32)));
         PlyElement element;
         element.name = std::string(words[1].substr(0, 32));
         if (!parse_count(words[2], &element.count)) return fail("bad element count");
@@ -297,12 +314,14 @@ class PlyChecker {
     std::vector<std::string_view> words;
     uint64_t line_number = 0;
     bool nul_byte = false;
+    const char* line_break = nullptr;
     auto next_data_line = [&] {
       while (std::getline(in, line)) {
         ++line_number;
         // assimp 5.2 reads an ascii body as a C string: a NUL byte ends it there, and a body that
         // ends early is read on past its end (found by fuzz_scene_loader: a 2 GB allocation).
         if (line.find('\0') != std::string::npos) return !(nul_byte = true);
+        if ((line_break = strip_line_end(line))) return false;
         split_words(line, words);
         if (!words.empty()) return true;
       }
@@ -314,6 +333,7 @@ class PlyChecker {
           if (nul_byte)
             return fail(fmt::format("a NUL byte in the ascii body (line {}), which ends it for the importer",
                                     line_number));
+          if (line_break) return fail(fmt::format("{} in the ascii body (line {})", line_break, line_number));
           return fail(fmt::format("the body ends at element '{}' #{} of {} (truncated file)", element.name, instance,
                                   element.count));
         }
@@ -419,16 +439,21 @@ Status check_off_file(const std::filesystem::path& file, uint64_t file_size) {
   in.seekg(std::streamoff(std::min(pos, head.size())));
   std::string line;
   bool nul_byte = false;
+  const char* line_break = nullptr;
   auto next_data_line = [&](std::vector<std::string_view>* words) {
     while (std::getline(in, line)) {
       // As for PLY: assimp 5.2 reads the text as a C string, so a NUL byte ends the file there.
       if (line.find('\0') != std::string::npos) return !(nul_byte = true);
+      if ((line_break = strip_line_end(line))) return !(nul_byte = true);
       split_words(line, *words);
       if (!words->empty()) return true;
     }
     return false;
   };
-  const auto nul_error = [&] { return fail("a NUL byte in the body, which ends it for the importer"); };
+  const auto nul_error = [&] {
+    return fail(line_break ? std::string(line_break) + " in the body"
+                           : std::string("a NUL byte in the body, which ends it for the importer"));
+  };
   std::vector<std::string_view> words;
   for (uint64_t v = 0; v < vertices; ++v)
     if (!next_data_line(&words)) {

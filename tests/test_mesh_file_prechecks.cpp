@@ -162,6 +162,41 @@ TEST(MeshFilePrechecks, HeaderTypesAndFormatMustBePly) {
   expect_refused(dir.path() / "float_count.ply", "not an integer type");
 }
 
+TEST(MeshFilePrechecks, ElementNamesStartingWithADigitAreRefused) {
+  // assimp 5.2 took the count of an unknown element from its name's leading digits (fuzz_scene_loader:
+  // "element 2222...face 128" asked for 57 GB); "7face" still loads with that rule, so the digit
+  // itself is refused.
+  TempDir dir;
+  std::string digits = kAsciiHeader;
+  digits.replace(digits.find("element face"), 12, "element 22222222222face");
+  write_file(dir.path() / "digits.ply", digits + kAsciiVertices + "3 0 1 2\n");
+  expect_refused(dir.path() / "digits.ply", "starts with a digit");
+  std::string named = kAsciiHeader;
+  named.replace(named.find("element face"), 12, "element face2");  // a name with a digit inside is fine
+  write_file(dir.path() / "named.ply", named + kAsciiVertices + "3 0 1 2\n");
+  EXPECT_TRUE(check_ply_file(dir.path() / "named.ply", std::filesystem::file_size(dir.path() / "named.ply")).ok());
+}
+
+TEST(MeshFilePrechecks, LineBreaksTheImporterSeesAreTheChecksToo) {
+  // assimp 5.2 also ends a line at \r and \f and joins a line ending in a backslash with the next:
+  // a \r inside a face line made it read "88888888888888888888 ..." as a face (fuzz_scene_loader,
+  // gigabytes). Such bodies are refused; CRLF line ends are fine.
+  TempDir dir;
+  write_file(dir.path() / "cr.ply", kAsciiHeader + kAsciiVertices + "3 0 1\r88888888888888888888 2\n");
+  expect_refused(dir.path() / "cr.ply", "carriage return or form feed inside a line");
+  write_file(dir.path() / "backslash.ply", kAsciiHeader + kAsciiVertices + "3 0 1 2 \\\n");
+  expect_refused(dir.path() / "backslash.ply", "ending in a backslash");
+  write_file(dir.path() / "cr.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1\f2\n");
+  expect_refused(dir.path() / "cr.off", "carriage return or form feed inside a line");
+  std::string crlf = kAsciiHeader;  // the body's lines end in \r\n
+  for (char c : kAsciiVertices + "3 0 1 2\n") {
+    if (c == '\n') crlf += '\r';
+    crlf += c;
+  }
+  write_file(dir.path() / "crlf.ply", crlf);
+  EXPECT_EQ(load_ok(dir.path() / "crlf.ply").triangle_count(), 1u);
+}
+
 TEST(MeshFilePrechecks, OffCountsMustBeIntegers) {
   // fuzz_scene_loader regression (off-vertex-count-then-vertex-line): no face count, then a vertex line
   // after a 13-digit vertex count; assimp 5.2 took 60 (from "60.000") as the face count and wrapped the
