@@ -21,6 +21,7 @@
 #include <unordered_set>
 
 #include "builder/mesh_file_prechecks.hpp"
+#include "builder/ply_triangle_reader.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -211,6 +212,23 @@ Result<Scene> convert(const aiScene& ai, const std::filesystem::path& file, Heig
   return scene;
 }
 
+// A PLY triangle mesh read without assimp, as convert() turns assimp's scene of it into a Scene: one
+// mesh, no node or mesh names (the mesh is named after the file), the identity transform applied
+// through the same arithmetic, so the two paths give the same scene bit for bit.
+Result<Scene> scene_from_ply_mesh(PlyTriangleMesh mesh, const std::filesystem::path& file,
+                                  HeightfieldMatcher& matcher) {
+  Scene scene;
+  Matrix identity{};
+  for (int i = 0; i < 4; ++i) identity[i][i] = 1;
+  std::vector<Vec3> vertices;
+  vertices.reserve(mesh.vertices.size());
+  for (const auto& v : mesh.vertices) vertices.push_back(transform(identity, aiVector3D(v[0], v[1], v[2])));
+  mesh.vertices = {};
+  const std::string name = instance_name("", "", file.stem().string());
+  (void)scene.add_mesh(name, vertices, mesh.triangles, matcher.match(name, "", ""));
+  return scene;
+}
+
 Result<Scene> import_with_assimp(const std::filesystem::path& file, const std::string& extension,
                                  HeightfieldMatcher& matcher) {
   // The PLY/OFF pre-checks first: they are one read of the file, while constructing an
@@ -221,6 +239,15 @@ Result<Scene> import_with_assimp(const std::filesystem::path& file, const std::s
     if (ec) return make_error(ErrorCode::io_error, fmt::format("{}: {}", file.string(), ec.message()));
     if (Status ok = extension == ".ply" ? check_ply_file(file, file_size) : check_off_file(file, file_size); !ok)
       return ok.error();
+    if (extension == ".ply") {  // the common binary triangle layout, without assimp's document of it
+      try {
+        auto mesh = read_ply_triangles(file, file_size);
+        if (!mesh) return mesh.error();
+        if (*mesh) return scene_from_ply_mesh(std::move(**mesh), file, matcher);
+      } catch (const std::bad_alloc&) {
+        return make_error(ErrorCode::invalid_input, fmt::format("{}: out of memory", file.string()));
+      }
+    }
   }
 
   install_assimp_logger();
