@@ -9,7 +9,10 @@
 // - the header holds only PLY keywords and no control characters (unknown lines and a vertical tab
 //   after "end_header" make assimp seek for seconds or for ever);
 // - property types are PLY's scalar types; element names do not start with a digit (assimp reads an
-//   unknown element's count from the start of its name);
+//   unknown element's count from the start of its name), and an element assimp does not know
+//   (other than vertex, face, tristrips, edge, material) is walked with no instances, as assimp
+//   reads it; no property follows a comment or blank line inside an element (assimp drops it); no
+//   \r inside a header line (assimp ends lines there);
 // - the body holds what the header declares: every element instance is walked (binary: by bytes,
 //   ascii: one instance per line, as assimp reads them), and every list's item count must fit in
 //   what is left (binary: of the file, ascii: of its line). assimp resizes a list to its count before

@@ -11,10 +11,12 @@
 namespace shadowtiles {
 namespace {
 
-// Header words split on spaces and tabs (as assimp splits them); a trailing \r is dropped.
+// Header words split on spaces and tabs (as assimp splits them); a trailing \r is dropped. A line with
+// any other \r gives no words (the caller then leaves the file to assimp).
 std::vector<std::string_view> words_of(std::string_view line) {
   if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
   std::vector<std::string_view> words;
+  if (line.find('\r') != std::string_view::npos) return words;
   size_t i = 0;
   while (i < line.size()) {
     while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
@@ -61,10 +63,16 @@ bool parse_layout(std::string_view head, Layout& layout) {
       if (words.size() != 1 || words[0] != "ply") return false;
       continue;
     }
-    if (words.empty() || words[0] == "comment" || words[0] == "obj_info") continue;
-    if (words[0] == "format") {
-      if (words.size() != 3 || words[1] != "binary_little_endian" || words[2] != "1.0") return false;
-    } else if (words[0] == "element") {
+    if (line_number == 1) {  // assimp wants the format right after the magic line
+      if (words.size() != 3 || words[0] != "format" || words[1] != "binary_little_endian" || words[2] != "1.0")
+        return false;
+      continue;
+    }
+    // Comments only before the first element: assimp ends an element's properties at any other line
+    // (a comment, a blank line), dropping the properties after it.
+    if (element == -1 && !words.empty() && (words[0] == "comment" || words[0] == "obj_info")) continue;
+    if (words.empty()) return false;
+    if (words[0] == "element") {
       if (words.size() != 3) return false;
       uint64_t count = 0;
       for (char c : words[2]) {
@@ -105,6 +113,8 @@ bool parse_layout(std::string_view head, Layout& layout) {
       }
     } else if (words[0] == "end_header") {
       layout.body_offset = pos;
+      // A body starting with a line-end byte: assimp's text reader may take it as the header's line end.
+      if (pos < head.size() && (head[pos] == '\n' || head[pos] == '\r')) return false;
       return element == 1 && face_list && have_xyz[0] && have_xyz[1] && have_xyz[2] && layout.faces > 0 &&
              layout.vertices <= 0xffffffffull && layout.faces <= 0xffffffffull;
     } else {

@@ -4,7 +4,9 @@
 // two sequential reads, the mesh's own arrays).
 //
 // Accepted (anything else returns nullopt and the caller imports the file with assimp as before):
-// - "format binary_little_endian 1.0", then an element "vertex" and an element "face", no others;
+// - "format binary_little_endian 1.0" on the line after "ply", comments only before the first
+//   element, then an element "vertex" and an element "face", no others; header lines end in \n or
+//   \r\n; the body's first byte is no line end;
 // - the vertex element's properties are scalars, with x, y and z of type float (float32) once each;
 // - the face element has one property, a list named vertex_indices (or vertex_index) of 4-byte
 //   integer indices, with an integer count type;

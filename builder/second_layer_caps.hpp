@@ -35,7 +35,8 @@ struct SecondLayerCapCounts {
   uint64_t pairs_tested = 0;   // footprint-overlapping pairs that passed the depth test
   uint64_t regions = 0;        // non-empty regions behind another triangle by the coplanar epsilon
   uint64_t near_regions = 0;   // non-empty regions behind it by less (near cover)
-  uint64_t skipped = 0;        // pairs or regions that could not change a capped interval
+  uint64_t skipped = 0;        // pairs or regions that could not change a capped interval (pairs
+                               // apart across an edge are counted in neither)
   ReceiverCapCounts texels;    // how the regions' texels were resolved
 };
 

@@ -188,6 +188,16 @@ TEST(MeshFilePrechecks, LineBreaksTheImporterSeesAreTheChecksToo) {
   expect_refused(dir.path() / "backslash.ply", "ending in a backslash");
   write_file(dir.path() / "cr.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1\f2\n");
   expect_refused(dir.path() / "cr.off", "carriage return or form feed inside a line");
+  write_file(dir.path() / "cr_counts.off", "OFF\n3 1\r0 0 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  expect_refused(dir.path() / "cr_counts.off", "carriage return or form feed inside a line");
+  std::string header_cr = kAsciiHeader;  // "element vertex 4000000000" for assimp
+  header_cr.replace(header_cr.find("element face 1"), 14, "comment x\relement face 1");
+  write_file(dir.path() / "header_cr.ply", header_cr + kAsciiVertices + "3 0 1 2\n");
+  expect_refused(dir.path() / "header_cr.ply", "carriage return inside a header line");
+  std::string comment_inside = kAsciiHeader;  // assimp drops "property float z" after the comment
+  comment_inside.insert(comment_inside.find("property float z"), "comment z follows\n");
+  write_file(dir.path() / "comment_inside.ply", comment_inside + kAsciiVertices + "3 0 1 2\n");
+  expect_refused(dir.path() / "comment_inside.ply", "after a comment or blank line inside an element");
   std::string crlf = kAsciiHeader;  // the body's lines end in \r\n
   for (char c : kAsciiVertices + "3 0 1 2\n") {
     if (c == '\n') crlf += '\r';
@@ -195,6 +205,30 @@ TEST(MeshFilePrechecks, LineBreaksTheImporterSeesAreTheChecksToo) {
   }
   write_file(dir.path() / "crlf.ply", crlf);
   EXPECT_EQ(load_ok(dir.path() / "crlf.ply").triangle_count(), 1u);
+}
+
+TEST(MeshFilePrechecks, ElementsTheImporterDoesNotKnowHaveNoInstances) {
+  // assimp 5.2 gives an element it does not know (here "camera") no instances, so the 4 bytes the
+  // header gives it are the face's list count for assimp: 0xfffffff0, a 64 GB list. The walk follows
+  // assimp and refuses the count.
+  TempDir dir;
+  std::string f =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement camera 1\nproperty uint a\nelement face 1\n"
+      "property list uint int vertex_indices\nend_header\n";
+  for (float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) append(&f, v);
+  append(&f, uint32_t(0xfffffff0u));  // the camera's value, assimp's face count
+  append(&f, uint32_t(3));
+  for (int32_t i : {0, 1, 2}) append(&f, i);
+  write_file(dir.path() / "camera.ply", f);
+  expect_refused(dir.path() / "camera.ply", "cannot fit");
+  // In ascii the unknown element's line is read as the first vertex, by assimp and by the walk.
+  write_file(dir.path() / "camera_ascii.ply",
+             "ply\nformat ascii 1.0\nelement camera 1\nproperty float a\nelement vertex 3\nproperty float x\n"
+             "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+             "end_header\n7 7 7\n0 0 0\n1 0 0\n3 0 1 2\n");
+  const Scene scene = load_ok(dir.path() / "camera_ascii.ply");
+  ASSERT_EQ(scene.vertices.size(), 3u);
 }
 
 TEST(MeshFilePrechecks, OffCountsMustBeIntegers) {

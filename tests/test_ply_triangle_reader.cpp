@@ -172,6 +172,17 @@ TEST(PlyTriangleReader, LeavesOtherLayoutsToAssimp) {
   std::string doubles = interleaved_ply("property list uchar int vertex_indices");
   doubles.replace(doubles.find("float x"), 7, "double x");
   not_read("double.ply", doubles);
+  // Header lines assimp reads otherwise: the format after a comment, a comment inside an element's
+  // properties (assimp drops the properties after it), a \r inside a line.
+  std::string late_format = interleaved_ply("property list uchar int vertex_indices");
+  late_format.insert(late_format.find("format"), "comment first\n");
+  not_read("late_format.ply", late_format);
+  std::string inner_comment = interleaved_ply("property list uchar int vertex_indices");
+  inner_comment.insert(inner_comment.find("property float x"), "comment here\n");
+  not_read("inner_comment.ply", inner_comment);
+  std::string inner_cr = interleaved_ply("property list uchar int vertex_indices");
+  inner_cr.replace(inner_cr.find("comment made by a test"), 22, "comment made\rby a test");
+  not_read("inner_cr.ply", inner_cr);
 }
 
 }  // namespace
