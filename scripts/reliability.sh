@@ -36,7 +36,7 @@ checks=(
   "Bit flips in decoded payloads|test_mh_robustness|MhRobustness.*|every single bit of MH/MMH payloads, random multi-byte corruption|flips past the checksum (the decoder alone)|refused or answers in bounds, never a crash"
   "Raw tile header|test_raw_tile|RawTile.*|magic, version, reserved bits, size, NaN/inf texels|corrupt raw payloads|every one refused (corrupt_data / unsupported)"
   "Malformed scenes|test_scene_loader|SceneLoaderErrors.*|truncated PLY at every length, hostile glTF, bad Terragen files|malformed files|a clear invalid_input error, no hang"
-  "Hostile PLY/OFF files|test_mesh_file_prechecks|MeshFilePrechecks.*|element and list counts beyond the file (binary and ascii), short bodies, ascii lines short of a coordinate, OFF indices out of range, control bytes and unknown lines in headers (each found by fuzz_scene_loader or the truncation tests)|files that made assimp 5.2 hang, allocate 21-32 GB or read out of bounds|none: refused before assimp parses them, with the rule that failed"
+  "Hostile PLY/OFF files|test_mesh_file_prechecks|MeshFilePrechecks.*|element and list counts beyond the file (binary and ascii), short bodies, ascii lines short of a coordinate, OFF indices out of range, control bytes and unknown lines in headers, element names starting with digits, elements assimp does not know, properties after a comment inside an element, \\r/\\f inside lines and backslash continuations (each found by fuzz_scene_loader, the truncation tests or a review against libassimp)|files that made assimp 5.2 hang, allocate 21-64 GB or read out of bounds|none: refused before assimp parses them, with the rule that failed"
 )
 
 log_of() { echo "$work/$(basename "$1").$(echo "$2" | tr -c 'a-zA-Z0-9' _).log"; }
