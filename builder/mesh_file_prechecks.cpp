@@ -12,6 +12,8 @@
 #include <string_view>
 #include <vector>
 
+#include "builder/ply_scalar_types.hpp"
+
 namespace shadowtiles {
 namespace {
 
@@ -80,26 +82,6 @@ uint64_t saturating_mul_add(uint64_t sum, uint64_t count, uint64_t size) {
 }
 
 // ---- PLY ----
-
-struct PlyScalarType {
-  uint8_t bytes = 0;  // 0: not a PLY type
-  bool is_signed = false;
-  bool is_integer = false;
-};
-
-PlyScalarType ply_type(std::string_view name) {
-  static constexpr std::array<std::pair<std::string_view, PlyScalarType>, 16> kTypes{{
-      {"char", {1, true, true}},     {"int8", {1, true, true}},     {"uchar", {1, false, true}},
-      {"uint8", {1, false, true}},   {"short", {2, true, true}},    {"int16", {2, true, true}},
-      {"ushort", {2, false, true}},  {"uint16", {2, false, true}},  {"int", {4, true, true}},
-      {"int32", {4, true, true}},    {"uint", {4, false, true}},    {"uint32", {4, false, true}},
-      {"float", {4, true, false}},   {"float32", {4, true, false}}, {"double", {8, true, false}},
-      {"float64", {8, true, false}},
-  }};
-  for (const auto& [key, type] : kTypes)
-    if (key == name) return type;
-  return {};
-}
 
 struct PlyProperty {
   bool is_list = false;
@@ -458,33 +440,30 @@ Status check_off_file(const std::filesystem::path& file, uint64_t file_size) {
   if (!in) return make_error(ErrorCode::io_error, fmt::format("{}: cannot open", file.string()));
   in.seekg(std::streamoff(std::min(pos, head.size())));
   std::string line;
-  bool nul_byte = false;
-  const char* line_break = nullptr;
+  std::string refused;  // why the body's reading stopped early, when it is refused for it
   auto next_data_line = [&](std::vector<std::string_view>* words) {
     while (std::getline(in, line)) {
       // As for PLY: assimp 5.2 reads the text as a C string, so a NUL byte ends the file there.
-      if (line.find('\0') != std::string::npos) return !(nul_byte = true);
-      if ((line_break = strip_line_end(line))) return !(nul_byte = true);
+      if (line.find('\0') != std::string::npos) {
+        refused = "a NUL byte in the body, which ends it for the importer";
+        return false;
+      }
+      if (const char* line_break = strip_line_end(line)) {
+        refused = std::string(line_break) + " in the body";
+        return false;
+      }
       split_words(line, *words);
       if (!words->empty()) return true;
     }
     return false;
   };
-  const auto nul_error = [&] {
-    return fail(line_break ? std::string(line_break) + " in the body"
-                           : std::string("a NUL byte in the body, which ends it for the importer"));
-  };
+  // Refused, or else short (assimp reports that).
+  const auto stopped = [&] { return refused.empty() ? Status::success() : Status(fail(refused)); };
   std::vector<std::string_view> words;
   for (uint64_t v = 0; v < vertices; ++v)
-    if (!next_data_line(&words)) {
-      if (nul_byte) return nul_error();
-      return Status::success();  // short: assimp reports it
-    }
+    if (!next_data_line(&words)) return stopped();
   for (uint64_t f = 0; f < faces; ++f) {
-    if (!next_data_line(&words)) {
-      if (nul_byte) return nul_error();
-      return Status::success();
-    }
+    if (!next_data_line(&words)) return stopped();
     uint64_t n = 0;
     if (!parse_count(words[0], &n))
       return fail(fmt::format("face #{} does not start with its vertex count ('{}')", f, words[0].substr(0, 32)));

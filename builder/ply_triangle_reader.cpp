@@ -8,6 +8,8 @@
 #include <string>
 #include <string_view>
 
+#include "builder/ply_scalar_types.hpp"
+
 namespace shadowtiles {
 namespace {
 
@@ -25,19 +27,6 @@ std::vector<std::string_view> words_of(std::string_view line) {
     if (i > start) words.push_back(line.substr(start, i - start));
   }
   return words;
-}
-
-// Bytes of a PLY scalar type, 0 when unknown.
-unsigned scalar_bytes(std::string_view type) {
-  for (auto [name, bytes] : {std::pair<std::string_view, unsigned>{"char", 1}, {"int8", 1}, {"uchar", 1}, {"uint8", 1},
-                             {"short", 2}, {"int16", 2}, {"ushort", 2}, {"uint16", 2}, {"int", 4}, {"int32", 4},
-                             {"uint", 4}, {"uint32", 4}, {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}})
-    if (name == type) return bytes;
-  return 0;
-}
-
-bool is_integer(std::string_view type) {
-  return type != "float" && type != "float32" && type != "double" && type != "float64";
 }
 
 // The layout the reader takes; see the header.
@@ -91,7 +80,7 @@ bool parse_layout(std::string_view head, Layout& layout) {
     } else if (words[0] == "property") {
       if (element == 0) {
         if (words.size() != 3) return false;  // lists in vertices: assimp's
-        const unsigned bytes = scalar_bytes(words[1]);
+        const unsigned bytes = ply_type(words[1]).bytes;
         if (bytes == 0) return false;
         static constexpr std::string_view kAxes[3] = {"x", "y", "z"};
         for (int k = 0; k < 3; ++k)
@@ -104,9 +93,9 @@ bool parse_layout(std::string_view head, Layout& layout) {
       } else if (element == 1) {
         if (face_list || words.size() != 5 || words[1] != "list") return false;
         if (words[4] != "vertex_indices" && words[4] != "vertex_index") return false;
-        layout.count_bytes = scalar_bytes(words[2]);
-        if (layout.count_bytes == 0 || !is_integer(words[2])) return false;
-        if (scalar_bytes(words[3]) != 4 || !is_integer(words[3])) return false;
+        const PlyScalarType count = ply_type(words[2]), index = ply_type(words[3]);
+        layout.count_bytes = count.bytes;
+        if (count.bytes == 0 || !count.is_integer || index.bytes != 4 || !index.is_integer) return false;
         face_list = true;
       } else {
         return false;
