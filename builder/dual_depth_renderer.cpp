@@ -402,7 +402,7 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
     std::vector<float> caps =
         options_.receivers == ReceiverContract::surfaces
             ? second_layer_caps(scene_, tile, options_.coplanar_epsilon, *intervals, options_.exit_margin,
-                                nullptr, std::move(storage))
+                                nullptr, std::move(storage), buffers ? &buffers->second_layer : nullptr)
             : receiver_surface_caps(scene_, tile, nullptr, std::move(storage));
     apply_exit_caps(*intervals, caps, options_.exit_margin);
     if (buffers) buffers->caps = std::move(caps);

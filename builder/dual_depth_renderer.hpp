@@ -35,6 +35,7 @@
 #include "builder/depth_interval.hpp"
 #include "builder/embree_device.hpp"
 #include "builder/light_space_scene.hpp"
+#include "builder/second_layer_caps.hpp"
 #include "codec/receiver_contract.hpp"
 
 namespace shadowtiles {
@@ -76,6 +77,7 @@ struct DualDepthOptions {
 struct RenderBuffers {
   TileIntervals intervals;  // give the previous tile's intervals back here when done with them
   std::vector<float> caps;  // kept by render()
+  SecondLayerScratch second_layer;  // the `surfaces` cap pass's working buffers
 };
 
 class DualDepthRenderer {

@@ -14,8 +14,10 @@
 // contains the exact one despite rounding: the caps are never above verify's brute-force reference.
 // Edge-on triangles (second_layer::edge_on) cover no area: they hide nothing and cap by their own
 // shallowest point. A pair is dropped before any clipping when an edge of either triangle separates
-// them, or when `back`'s plane lies nowhere behind `front`'s over the box the clips could keep (the
-// depth gap is linear, so its corners bound it): the regions found are the same.
+// them, when `back` is behind `front` by less than kSameSurface wherever it meets a widened edge of
+// `front` (mesh neighbours: the part of `back` a widened edge keeps is a sliver along a shared edge
+// or vertex), or when `back`'s plane lies nowhere behind `front`'s over the box the clips could keep
+// (the depth gap is linear, so its corners bound it): the regions found are the same.
 // Why not Embree's rtcCollide: it hands pairs to a callback under a lock on worker threads, and a
 // city tile has tens of millions of pairs; the grid visits them in place (honolulu 16K: caps
 // thread-seconds 8.4 -> 5.4, stores byte-identical).
@@ -23,6 +25,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "builder/depth_interval.hpp"
@@ -40,15 +43,32 @@ struct SecondLayerCapCounts {
   ReceiverCapCounts texels;    // how the regions' texels were resolved
 };
 
+// Working buffers second_layer_caps keeps between tiles: on a city or terrain tile they hold about
+// 10 MB, and fresh pages cost a fault each (41 % of an oahu `surfaces` build's faults came from here).
+class SecondLayerScratch {
+ public:
+  SecondLayerScratch();
+  ~SecondLayerScratch();
+  SecondLayerScratch(SecondLayerScratch&&) noexcept;
+  SecondLayerScratch& operator=(SecondLayerScratch&&) noexcept;
+
+  struct Buffers;  // defined where it is used
+  Buffers& buffers() { return *buffers_; }
+
+ private:
+  std::unique_ptr<Buffers> buffers_;
+};
+
 // The cap per texel of `tile` (+inf where no second layer lies in the square); `coplanar_epsilon` in
 // normalised depth (second_layer::coplanar_epsilon). `intervals` (the tile's centre intervals) give
 // each texel's lower for the near-cover floor; with the exit margin, regions that cannot change
 // apply_exit_caps' result anywhere in their box are skipped: float(shallowest) - margin >= every
 // texel's upper there (texels without an exit have nothing to cap). The caps are then exact only
 // where they matter; apply_exit_caps gives the same intervals as with every region.
-// `storage`: a buffer to reuse (as receiver_surface_caps).
+// `storage`: a buffer to reuse (as receiver_surface_caps); `scratch`: working buffers to reuse.
 std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
                                      const TileIntervals& intervals, float exit_margin,
-                                     SecondLayerCapCounts* counts = nullptr, std::vector<float> storage = {});
+                                     SecondLayerCapCounts* counts = nullptr, std::vector<float> storage = {},
+                                     SecondLayerScratch* scratch = nullptr);
 
 }  // namespace shadowtiles
