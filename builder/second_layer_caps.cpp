@@ -122,38 +122,47 @@ bool apart_across_back(const Prepared& back, const Prepared& front) {
   return false;
 }
 
-// An upper bound on the depth gap back - front over what covered_by keeps: for each widened edge of
-// `front`, the part of `back` inside it holds every kept point, and the gap, linear on `back`, is
-// largest at that part's vertices (back's vertices inside, and where back's edges cross the line).
-// The smallest of the three bounds is returned, plus a slack for the rounding of the gaps; -inf when
-// `back` lies wholly outside a widened edge (apart). It is what makes mesh neighbours cheap: a triangle beside `front`, across a shared edge or vertex, keeps only
+// Could `back` lie behind `front` by more than `gap` anywhere covered_by keeps? For each widened
+// edge of `front`, the part of `back` inside it holds every kept point, and the depth gap back -
+// front, linear on `back`, is largest at that part's vertices: back's vertices inside, and where
+// back's edges cross the line. False when one edge's part stays at or under `gap` (less a slack for
+// the rounding of the gaps), or is empty (`back` wholly outside that widened edge: apart). It is what
+// makes mesh neighbours cheap: a triangle beside `front`, across a shared edge or vertex, keeps only
 // a sliver 2^-20 texels wide along `front`'s edge, where the gap is near 0 (both planes hold the
 // shared vertices), whereas the pair's boxes overlap widely. Rounding that misplaces a vertex near a
 // widened edge moves it by far less than the widening, so the exact region stays inside the bound.
-double gap_bound_by_edges(const Prepared& back, const Prepared& front) {
-  std::array<double, 3> gap;
+// Division-free: a crossing's gap exceeds `gap` when the weighted sum below is positive.
+bool behind_near_front_edges(const Prepared& back, const Prepared& front, double gap) {
+  std::array<std::array<double, 3>, 3> f;  // f[k][i]: back's vertex i against front's widened edge k
+  for (int k = 0; k < 3; ++k) {
+    const LightSpacePoint& e = front.p[k];
+    for (int i = 0; i < 3; ++i)
+      f[k][i] = front.A[k] * (back.p[i].u - e.u) + front.B[k] * (back.p[i].v - e.v) + front.widen[k];
+    if (f[k][0] < 0 && f[k][1] < 0 && f[k][2] < 0) return false;  // apart across this edge
+  }
+  std::array<double, 3> excess;  // each vertex's gap less the threshold
   double scale = 1;
   for (int i = 0; i < 3; ++i) {
     const double du = back.p[i].u - front.p[0].u, dv = back.p[i].v - front.p[0].v;
-    gap[i] = back.p[i].depth - front.depth_at(back.p[i].u, back.p[i].v);
+    excess[i] = back.p[i].depth - front.depth_at(back.p[i].u, back.p[i].v);
     scale = std::max(scale, std::fabs(back.p[i].depth) + std::fabs(front.p[0].depth) + std::fabs(front.gu * du) +
                                 std::fabs(front.gv * dv));
   }
-  double bound = kInfinity;
+  const double threshold = gap - 1e-9 * scale;
+  for (double& x : excess) x -= threshold;
   for (int k = 0; k < 3; ++k) {
-    const LightSpacePoint& e = front.p[k];
-    std::array<double, 3> f;
-    for (int i = 0; i < 3; ++i)
-      f[i] = front.A[k] * (back.p[i].u - e.u) + front.B[k] * (back.p[i].v - e.v) + front.widen[k];
-    double most = -kInfinity;
-    for (int i = 0; i < 3; ++i) {
+    bool exceeds = false;
+    for (int i = 0; i < 3 && !exceeds; ++i) {
       const int j = i == 2 ? 0 : i + 1;
-      if (f[i] >= 0) most = std::max(most, gap[i]);
-      if ((f[i] >= 0) != (f[j] >= 0)) most = std::max(most, gap[i] + f[i] / (f[i] - f[j]) * (gap[j] - gap[i]));
+      const double fi = f[k][i], fj = f[k][j];
+      if (fi >= 0) exceeds = excess[i] > 0;
+      // The crossing, (fi e_j - fj e_i) / (fi - fj) with one of fi, fj negative: the sign of the sum.
+      if (!exceeds && (fi >= 0) != (fj >= 0)) exceeds = fi >= 0 ? excess[i] * -fj + excess[j] * fi > 0
+                                                                : excess[j] * fi - excess[i] * fj < 0;
     }
-    bound = std::min(bound, most);
+    if (!exceeds) return false;
   }
-  return bound + 1e-9 * scale;
+  return true;
 }
 
 // The part of `back` inside `front`'s footprint (its edges widened as the header says), into
@@ -466,7 +475,7 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
     // Behind by too little wherever `back` meets a widened edge of `front`, or outside one: the
     // cheapest test that rejects most pairs whose boxes overlap (oahu 16384^2: 5.5 million of the 7.6
     // million ordered pairs that pass the test above are mesh neighbours, which it rejects).
-    if (!(gap_bound_by_edges(back, front) > same_surface)) return;
+    if (!behind_near_front_edges(back, front, same_surface)) return;
     // Every point the clips keep lies in this box (on `back`, inside `front`'s widened footprint),
     // and on `back`'s plane, so the depth gap back - front there is within the gap's range over the
     // box's corners (a linear function), give or take the slack for rounding.
