@@ -166,7 +166,7 @@ bool behind_near_front_edges(const Prepared& back, const Prepared& front, double
 }
 
 // The part of `back` inside `front`'s footprint (its edges widened as the header says), into
-// `covered` (`scratch`: working space); false when empty. The caller has ruled out apart(back, front).
+// `covered` (`scratch`: working space); false when empty. The caller has ruled out a separating edge.
 bool covered_by(const Prepared& back, const Prepared& front, Polygon& covered, Polygon& scratch) {
   Polygon* current = &covered;
   Polygon* next = &scratch;
