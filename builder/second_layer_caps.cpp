@@ -141,7 +141,12 @@ bool behind_near_front_edges(const Prepared& back, const Prepared& front, double
     if (f[k][0] < 0 && f[k][1] < 0 && f[k][2] < 0) return false;  // apart across this edge
   }
   std::array<double, 3> excess;  // each vertex's gap less the threshold
-  double scale = 1;
+  // The slack's scale: the gaps' magnitudes, and the front plane's slope times the absolute
+  // coordinates, since the clips' crossing points are rounded to ulps of u and v (up to 65536
+  // texels): on a steep front that rounding alone can put a clipped point behind by the threshold,
+  // and such a pair must go on to the clips as before (a review found caps above the reference's
+  // without this term: steep fronts, |gradient| >= 1e3 per texel, gaps just under the threshold).
+  double scale = 1 + 1e-6 * (std::fabs(front.gu * front.p[0].u) + std::fabs(front.gv * front.p[0].v));
   for (int i = 0; i < 3; ++i) {
     const double du = back.p[i].u - front.p[0].u, dv = back.p[i].v - front.p[0].v;
     excess[i] = back.p[i].depth - front.depth_at(back.p[i].u, back.p[i].v);
@@ -281,6 +286,10 @@ struct SecondLayerScratch::Buffers {
 };
 
 SecondLayerScratch::SecondLayerScratch() : buffers_(std::make_unique<Buffers>()) {}
+SecondLayerScratch::Buffers& SecondLayerScratch::buffers() {
+  if (!buffers_) buffers_ = std::make_unique<Buffers>();  // moved from: empty buffers again
+  return *buffers_;
+}
 SecondLayerScratch::~SecondLayerScratch() = default;
 SecondLayerScratch::SecondLayerScratch(SecondLayerScratch&&) noexcept = default;
 SecondLayerScratch& SecondLayerScratch::operator=(SecondLayerScratch&&) noexcept = default;
@@ -396,18 +405,20 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
   std::vector<uint32_t>& sides = buffers.sides;
   sides.assign(1, cells);
   if (pyramid.empty()) pyramid.resize(1), lower_pyramid.resize(1);
-  std::vector<float>& cell_upper = pyramid[0];
-  std::vector<float>& cell_lower = lower_pyramid[0];
-  cell_upper.assign(size_t(cells) * cells, kNothing), cell_lower.assign(size_t(cells) * cells, kNone);
-  for (uint32_t v = 0; v < size; ++v)
-    for (uint32_t u = 0; u < size; ++u) {
-      const DepthInterval& t = intervals.at(u, v);
-      if (t.upper > t.lower && t.lower < 1.0f) {
-        const size_t cell = size_t(v / kCell) * cells + u / kCell;
-        cell_upper[cell] = std::max(cell_upper[cell], t.upper);
-        cell_lower[cell] = std::min(cell_lower[cell], t.lower);
+  {  // (references into the pyramids: the levels below may reallocate them)
+    std::vector<float>& cell_upper = pyramid[0];
+    std::vector<float>& cell_lower = lower_pyramid[0];
+    cell_upper.assign(size_t(cells) * cells, kNothing), cell_lower.assign(size_t(cells) * cells, kNone);
+    for (uint32_t v = 0; v < size; ++v)
+      for (uint32_t u = 0; u < size; ++u) {
+        const DepthInterval& t = intervals.at(u, v);
+        if (t.upper > t.lower && t.lower < 1.0f) {
+          const size_t cell = size_t(v / kCell) * cells + u / kCell;
+          cell_upper[cell] = std::max(cell_upper[cell], t.upper);
+          cell_lower[cell] = std::min(cell_lower[cell], t.lower);
+        }
       }
-    }
+  }
   while (sides.back() > 1) {
     const uint32_t from = sides.back(), to = (from + 1) / 2;
     const size_t at_level = sides.size();

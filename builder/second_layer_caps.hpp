@@ -53,7 +53,7 @@ class SecondLayerScratch {
   SecondLayerScratch& operator=(SecondLayerScratch&&) noexcept;
 
   struct Buffers;  // defined where it is used
-  Buffers& buffers() { return *buffers_; }
+  Buffers& buffers();
 
  private:
   std::unique_ptr<Buffers> buffers_;
