@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "store/lmdb_store.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles::testing {
@@ -73,6 +74,21 @@ inline RandomKillTally kill_at_random_moments(const RandomKillPlan& plan,
   EXPECT_EQ(wait_status(spawn_process(args(round), log)), 0) << "the last resume failed: see " << log;
   check_completed(round);
   return tally;
+}
+
+// The tile records a killed run's store holds. 0 when it holds none yet: no data.mdb, or a
+// data.mdb without the store's databases (a kill between creating the LMDB file and the first
+// commit, which creates them). Any other failure to open it fails the test.
+inline size_t committed_tiles(const std::filesystem::path& dir) {
+  if (!std::filesystem::exists(dir / "data.mdb")) return 0;
+  auto store = store::Store::open(dir, {store::Store::Mode::read_only});
+  if (!store.ok()) {
+    EXPECT_EQ(store.error().code, ErrorCode::not_found) << dir << ": " << store.error().message;
+    return 0;
+  }
+  size_t tiles = 0;
+  EXPECT_TRUE((*store)->for_each(store::Database::tiles, {}, [&](auto, auto) { return ++tiles, true; }).ok()) << dir;
+  return tiles;
 }
 
 }  // namespace shadowtiles::testing

@@ -98,11 +98,7 @@ TEST(Faults, SigkillAtTwentyRandomMomentsThenResumeStoresExactlyTheCleanBuild) {
       {.max_moment_s = clean_s / 2, .kills = 20, .between_commits = 5, .seed = 18},
       [&](int round) { return build_args(round_dir(round)); }, log,
       [&](int round) { expect_same_records(round_dir(round), dir.path() / "clean"); },
-      [&](int round) {
-        return std::filesystem::exists(round_dir(round) / "data.mdb")
-                   ? records(round_dir(round), store::Database::tiles).size()
-                   : size_t(0);
-      },
+      [&](int round) { return testing::committed_tiles(round_dir(round)); },
       clean_tiles);
   const int kills = tally.kills, mid_build_kills = tally.between_commits, runs = tally.runs,
             completed_rounds = tally.completed_rounds;

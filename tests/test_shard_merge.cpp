@@ -248,11 +248,7 @@ TEST_F(ShardMerge, SigkillAtTwentyRandomMomentsThenResumeEqualsTheOneMachineBuil
       {.max_moment_s = clean_s, .kills = 20, .between_commits = 3, .seed = 16},
       [&](int round) { return merge_args(round_dir(round)); }, log,
       [&](int round) { expect_same_build(round_dir(round), dir_->path() / "single"); },
-      [&](int round) {
-        return std::filesystem::exists(round_dir(round) / "data.mdb")
-                   ? read_all(round_dir(round), store::Database::tiles).size()
-                   : size_t(0);
-      },
+      [&](int round) { return testing::committed_tiles(round_dir(round)); },
       clean_tiles);
   const int kills = tally.kills, mid_merge_kills = tally.between_commits, runs = tally.runs,
             completed_rounds = tally.completed_rounds;
