@@ -391,6 +391,7 @@ Status check_off_file(const std::filesystem::path& file, uint64_t file_size) {
     std::string line(head, pos, end - pos);
     if (const char* problem = strip_line_end(line))  // assimp would split the line there too
       return make_error(ErrorCode::invalid_input, fmt::format("{}: OFF: {} in the header", file.string(), problem));
+    // Words of `head`, not of `line`: `counts` keeps them past this line.
     auto words = split_words(std::string_view(head).substr(pos, line.size()));
     pos = end + 1;
     if (words.empty() || words[0][0] == '#') continue;

@@ -285,9 +285,9 @@ struct SecondLayerScratch::Buffers {
   std::vector<uint32_t> sides;
 };
 
-SecondLayerScratch::SecondLayerScratch() : buffers_(std::make_unique<Buffers>()) {}
+SecondLayerScratch::SecondLayerScratch() = default;
 SecondLayerScratch::Buffers& SecondLayerScratch::buffers() {
-  if (!buffers_) buffers_ = std::make_unique<Buffers>();  // moved from: empty buffers again
+  if (!buffers_) buffers_ = std::make_unique<Buffers>();  // first use, or moved from
   return *buffers_;
 }
 SecondLayerScratch::~SecondLayerScratch() = default;

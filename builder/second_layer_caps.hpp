@@ -53,7 +53,7 @@ class SecondLayerScratch {
   SecondLayerScratch& operator=(SecondLayerScratch&&) noexcept;
 
   struct Buffers;  // defined where it is used
-  Buffers& buffers();
+  Buffers& buffers();  // allocated at first use
 
  private:
   std::unique_ptr<Buffers> buffers_;
@@ -65,10 +65,10 @@ class SecondLayerScratch {
 // apply_exit_caps' result anywhere in their box are skipped: float(shallowest) - margin >= every
 // texel's upper there (texels without an exit have nothing to cap). The caps are then exact only
 // where they matter; apply_exit_caps gives the same intervals as with every region.
-// `storage`: a buffer to reuse (as receiver_surface_caps); `scratch`: working buffers to reuse.
+// `storage`: a buffer to reuse (as receiver_surface_caps); `reuse`: working buffers to reuse.
 std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
                                      const TileIntervals& intervals, float exit_margin,
                                      SecondLayerCapCounts* counts = nullptr, std::vector<float> storage = {},
-                                     SecondLayerScratch* scratch = nullptr);
+                                     SecondLayerScratch* reuse = nullptr);
 
 }  // namespace shadowtiles
