@@ -29,34 +29,40 @@ Result<std::vector<uint8_t>> encode_mh(const MhHierarchy& h, const MhEncodeOptio
   if (Status s = check_structure(h); !s) return s.error();
   const unsigned L = h.levels;
 
-  // Reachable blocks in breadth-first order, then their subtree heights (children come later in
-  // breadth-first order of a tree, but not necessarily with shared blocks: memoised recursion,
-  // depth bounded by the levels).
+  // Block order: the reverse postorder of a depth-first walk that takes a block's children last to
+  // first, i.e. the blocks in preorder for a tree (a block, then its first child's whole subtree,
+  // then the next child's). Every reference points forward, as the format requires: in a DAG
+  // (MMH's shared blocks) a child finishes before any of its parents. A walk's blocks below the
+  // skip list then lie within the subtree's few kilobytes, where the former order (tallest subtree
+  // first, i.e. level by level) put each level in its own region of the stream: one cache and TLB
+  // miss per level on a deep tree.
   std::vector<uint32_t> order;
-  std::vector<int32_t> height(h.block_count(), -1);
   uint64_t references = 0;
   if (h.root_mask != 0) {
     std::vector<uint8_t> seen(h.block_count(), 0);
-    order.push_back(h.root_block);
+    struct Frame {
+      uint32_t block;
+      unsigned children_left;  // counts down: the last child is walked first
+    };
+    std::vector<Frame> stack;  // as deep as the tree (check_structure bounds it by the levels)
+    stack.push_back({h.root_block, F::branch_children(h.block_mask[h.root_block])});
     seen[h.root_block] = 1;
     references = 1;
-    for (size_t k = 0; k < order.size(); ++k) {
-      const uint32_t b = order[k];
-      for (unsigned r = 0; r < F::branch_children(h.block_mask[b]); ++r) {
-        const uint32_t c = h.child_block[h.block_first_child[b] + r];
-        ++references;
-        if (!seen[c]) seen[c] = 1, order.push_back(c);
+    while (!stack.empty()) {
+      Frame& top = stack.back();
+      if (top.children_left == 0) {
+        order.push_back(top.block);
+        stack.pop_back();
+        continue;
+      }
+      const uint32_t c = h.child_block[h.block_first_child[top.block] + --top.children_left];
+      ++references;
+      if (!seen[c]) {
+        seen[c] = 1;
+        stack.push_back({c, F::branch_children(h.block_mask[c])});
       }
     }
-    auto compute = [&](auto&& self, uint32_t b) -> int32_t {
-      if (height[b] >= 0) return height[b];
-      int32_t hb = 0;
-      for (unsigned r = 0; r < F::branch_children(h.block_mask[b]); ++r)
-        hb = std::max(hb, 1 + self(self, h.child_block[h.block_first_child[b] + r]));
-      return height[b] = hb;
-    };
-    compute(compute, h.root_block);
-    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return height[a] > height[b]; });
+    std::reverse(order.begin(), order.end());
   }
 
   uint64_t records = 0, values = 0;

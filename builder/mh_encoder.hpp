@@ -1,7 +1,8 @@
 // Encodes an MhHierarchy (MH or MMH) into the random-access payload of codec/mh_format.hpp
 // (docs/mh.md), read by codec/mh_decoder. Values are mh_value_for(interval) (finite, inside the
-// interval). Blocks are laid out tallest subtree first, so offsets point forward; the offset width
-// is the smallest of 1..4 bytes that addresses the node stream.
+// interval). Blocks are laid out in preorder (a block, then each child's subtree in turn; shared
+// MMH blocks after all their parents), so offsets point forward and a walk's deep levels lie close
+// together; the offset width is the smallest of 1..4 bytes that addresses the node stream.
 // Errors: invalid_input for a malformed hierarchy (check_structure) or a node stream over 4 GiB.
 // Thread safety: pure functions.
 #pragma once

@@ -47,7 +47,8 @@ class MhDecodedTile final : public DecodedTile {
   float value(uint32_t u, uint32_t v, unsigned max_level) const override {
     return view_.lookup(u, v, max_level == 255 ? kMhAllLevels : max_level);
   }
-  size_t memory_bytes() const override { return payload_.size() + sizeof(*this) + view_.stats().skip_list_bytes; }
+  // The embedded skip list is inside the payload; the view's own copy (or derived list) is not.
+  size_t memory_bytes() const override { return payload_.size() + sizeof(*this) + view_.derived_bytes(); }
   uint32_t lit_count(uint32_t u0, uint32_t v0, uint32_t kw, uint32_t kh, float threshold) const override {
     return view_.pcf_lit_count(u0, v0, kw, kh, threshold, 0.0f);
   }

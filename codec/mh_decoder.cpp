@@ -232,7 +232,9 @@ Result<MhTileView> MhTileView::parse(std::span<const uint8_t> payload, const MhP
   }
 
   // Skip list: derived from the tree; an embedded one must equal it byte for byte.
-  const unsigned S = has_skip ? embedded_skip : std::min({options.skip_level, L, F::kMaxSkipLevel});
+  unsigned S = has_skip ? embedded_skip : std::min({options.skip_level, L, F::kMaxSkipLevel});
+  if (!has_skip && options.skip_level == kMhSkipLevelBySize)
+    while (S > 0 && (sizeof(WalkState) << (2 * S)) * 16 > payload.size()) --S;
   if (S > 0) {
     const uint32_t side = uint32_t(1) << S;
     view.skip_level_ = S;
@@ -424,6 +426,7 @@ void MhTileView::lit_interleaved_impl(std::span<const TexelQuery> queries, unsig
     unsigned level;
     uint32_t u, v;
     size_t index;
+    bool entering;  // its skip list entry is being fetched: read on the lane's next turn
   };
   Lane lanes[kLanes];
   size_t next = 0;
@@ -432,10 +435,19 @@ void MhTileView::lit_interleaved_impl(std::span<const TexelQuery> queries, unsig
     __builtin_prefetch(stream_ + s.offset);
     __builtin_prefetch(stream_ + s.offset + F::block_bytes(s.mask, W) - 1);
   };
+  // A deep skip list (large tiles: level 8, 768 KiB) is itself a miss per walk: its entry is
+  // prefetched here and read a turn later, like the blocks.
+  const bool skip_entry = skip_level_ != 0 && stop >= skip_level_;
+  const unsigned skip_shift = levels_ - skip_level_;
   auto start = [&](Lane& lane) {
     lane.index = next++;
     lane.u = queries[lane.index].u & mask;
     lane.v = queries[lane.index].v & mask;
+    lane.entering = skip_entry;
+    if (skip_entry) {
+      __builtin_prefetch(&skip_[(size_t(lane.v >> skip_shift) << skip_level_) | (lane.u >> skip_shift)]);
+      return;
+    }
     lane.s = start_state(lane.u, lane.v, stop, &lane.level);
     prefetch(lane.s);
   };
@@ -444,6 +456,13 @@ void MhTileView::lit_interleaved_impl(std::span<const TexelQuery> queries, unsig
   while (live > 0) {
     for (unsigned i = 0; i < live;) {
       Lane& lane = lanes[i];
+      if (lane.entering) {
+        lane.entering = false;
+        lane.s = start_state(lane.u, lane.v, stop, &lane.level);
+        prefetch(lane.s);
+        ++i;
+        continue;
+      }
       if (lane.s.mask != 0 && lane.level < stop &&
           step<W>(stream_, child_index(lane.u, lane.v, L - 1 - lane.level), lane.s)) {
         ++lane.level;

@@ -23,11 +23,17 @@
 namespace shadowtiles {
 
 inline constexpr unsigned kMhAllLevels = std::numeric_limits<unsigned>::max();
+// MhParseOptions::skip_level: chosen from the payload's size (see there).
+inline constexpr unsigned kMhSkipLevelBySize = std::numeric_limits<unsigned>::max();
 
 struct MhParseOptions {
   // Level of the in-memory skip list lookups start from; clamped to the tile's levels, 0 = none.
-  // Ignored when the payload embeds a skip list (that one is validated and used).
-  unsigned skip_level = 6;
+  // kMhSkipLevelBySize: the deepest level (at most 10) whose entries take at most a sixteenth of
+  // the payload, so a decoded tile stays within 1.07x its payload while a large, deep tile (a
+  // full-depth tree of an open mesh under `anywhere`: 14 MB at 2048^2) starts its walks at level 8,
+  // three blocks above its texels, instead of five. Ignored when the payload embeds a skip list
+  // (that one is validated and used).
+  unsigned skip_level = kMhSkipLevelBySize;
 };
 
 // Counts over the stored (distinct) nodes; the root counts as a leaf or inner node.
@@ -61,6 +67,9 @@ class MhTileView {
   unsigned levels() const { return levels_; }
   float root_value() const { return root_value_; }
   const MhStats& stats() const { return stats_; }
+  // Level of the in-memory skip list (0: none), and the bytes it holds beside the payload.
+  unsigned skip_level() const { return skip_level_; }
+  size_t derived_bytes() const { return skip_.size() * sizeof(WalkState); }
 
   // Shadow value for texel (u, v): the value of the deepest valued node on the path, walking at most
   // down to level `max_level` (0 = root only; levels() or more = full resolution). Every level is a

@@ -10,8 +10,9 @@
 // (children, no value), 11 inner (value and children). Block = [one record per child with
 // children, in child order][one float32 value per child with a value, in child order]; a record is
 // the child's own mask (1 byte) + the byte offset of its child block in the node stream
-// (offset_width bytes). Blocks are laid out tallest subtree first, so every offset points forward;
-// MMH shares a block between records by giving them the same offset.
+// (offset_width bytes). Every offset points forward (the decoder requires it; the encoder writes
+// blocks in preorder, earlier stores tallest subtree first); MMH shares a block between records by
+// giving them the same offset.
 // Skip list entry (level S, 2^S x 2^S, row-major): float32 value (deepest value on the path down to
 // level S), mask of the level-S node (0 when the walk ends above or at S), offset of its block.
 #pragma once

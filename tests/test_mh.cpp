@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <tuple>
 
@@ -12,6 +13,7 @@
 #include "builder/mh_synthetic.hpp"
 #include "builder/mh_verify.hpp"
 #include "codec/mh_decoder.hpp"
+#include "codec/mh_format.hpp"
 #include "tests/mh_reference_intervals.hpp"
 #include "tests/parsed_payload.hpp"
 
@@ -127,6 +129,75 @@ TEST(MhSkipList, EmbeddedEqualsDerived) {
     ASSERT_TRUE(bare.ok());
     for (uint32_t v = 0; v < 128; v += 3)
       for (uint32_t u = 0; u < 128; u += 5) ASSERT_EQ(bare->lookup(u, v), plain.view.lookup(u, v));
+  }
+}
+
+// Without the skip list's choice given, the view takes the deepest level whose entries stay within a
+// sixteenth of the payload: deep on a large full-depth tile, shallow on a small one, and the
+// lookups equal a walk from the root.
+TEST(MhSkipList, LevelChosenByPayloadSize) {
+  struct Case {
+    MhSyntheticKind kind;
+    uint32_t size;
+  };
+  for (const Case c : {Case{MhSyntheticKind::noisy_plane, 1024}, Case{MhSyntheticKind::steps, 128},
+                       Case{MhSyntheticKind::all_miss, 64}}) {
+    const TileIntervals tile = make_synthetic_tile(c.kind, c.size, 7);
+    Encoded e = encode_and_parse(tile, MhConstruction::bottom_up);
+    const MhTileView& view = e.view;
+    const unsigned S = view.skip_level();
+    EXPECT_LE(view.derived_bytes() * 16, e.bytes.size()) << c.size;
+    if (S > 0 && S < std::min(view.levels(), 10u)) {
+      EXPECT_GT(view.derived_bytes() * 4 * 16, e.bytes.size()) << c.size << ": one level deeper would fit";
+    }
+    if (c.size == 1024) {
+      EXPECT_GE(S, 7u) << "a large full-depth tile starts below the old fixed level 6";
+    }
+    if (c.kind == MhSyntheticKind::all_miss) {
+      EXPECT_EQ(S, 0u) << "a root leaf needs no skip list";
+    }
+    MhParseOptions from_root;
+    from_root.skip_level = 0;
+    auto bare = MhTileView::parse(e.bytes, from_root);
+    ASSERT_TRUE(bare.ok());
+    EXPECT_EQ(bare->skip_level(), 0u);
+    for (uint32_t v = 0; v < c.size; v += 7)
+      for (uint32_t u = 0; u < c.size; u += 3)
+        for (unsigned m : {0u, 3u, 8u, kMhAllLevels}) ASSERT_EQ(view.lookup(u, v, m), bare->lookup(u, v, m));
+  }
+}
+
+// The encoder writes a tree's blocks in preorder: each block, then its children's subtrees in child
+// order, so a walk's last levels lie within a few hundred bytes (one region per level before).
+TEST(MhEncode, BlocksInPreorder) {
+  namespace F = mh_format;
+  for (const MhSyntheticKind kind : {MhSyntheticKind::noisy_plane, MhSyntheticKind::steps}) {
+    const TileIntervals tile = make_synthetic_tile(kind, 256, 11);
+    Encoded e = encode_and_parse(tile, MhConstruction::bottom_up);
+    ASSERT_FALSE(e.bytes.empty());
+    const uint8_t* head = e.bytes.data();
+    const unsigned W = head[F::kOffOffsetWidth];
+    ASSERT_EQ(head[F::kOffSkipLevel], 0u);
+    uint32_t stream_bytes;
+    std::memcpy(&stream_bytes, head + F::kOffStreamBytes, 4);
+    const uint8_t* stream = head + F::kHeaderBytes;
+    uint64_t next = 0;  // where the next block in preorder must start
+    uint64_t blocks = 0;
+    auto visit = [&](auto&& self, uint32_t offset, uint8_t mask) -> void {
+      ASSERT_EQ(offset, next) << "block " << blocks;
+      ++blocks;
+      next += F::block_bytes(mask, W);
+      for (unsigned r = 0; r < F::branch_children(mask); ++r) {
+        const uint8_t* record = stream + offset + r * F::record_bytes(W);
+        uint32_t child = 0;
+        std::memcpy(&child, record + 1, W);
+        self(self, child, record[0]);
+      }
+    };
+    ASSERT_NE(head[F::kOffRootMask], 0u);
+    visit(visit, 0, head[F::kOffRootMask]);
+    EXPECT_EQ(next, stream_bytes);
+    EXPECT_EQ(blocks, e.view.stats().blocks);
   }
 }
 
