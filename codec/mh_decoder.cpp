@@ -234,7 +234,7 @@ Result<MhTileView> MhTileView::parse(std::span<const uint8_t> payload, const MhP
   // Skip list: derived from the tree; an embedded one must equal it byte for byte.
   unsigned S = has_skip ? embedded_skip : std::min({options.skip_level, L, F::kMaxSkipLevel});
   if (!has_skip && options.skip_level == kMhSkipLevelBySize)
-    while (S > 0 && (sizeof(WalkState) << (2 * S)) * 16 > payload.size()) --S;
+    while (S > 0 && (sizeof(WalkState) << (2 * S)) * 5 > payload.size()) --S;
   if (S > 0) {
     const uint32_t side = uint32_t(1) << S;
     view.skip_level_ = S;

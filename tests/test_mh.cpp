@@ -133,7 +133,7 @@ TEST(MhSkipList, EmbeddedEqualsDerived) {
 }
 
 // Without the skip list's choice given, the view takes the deepest level whose entries stay within a
-// sixteenth of the payload: deep on a large full-depth tile, shallow on a small one, and the
+// fifth of the payload: deep on a large full-depth tile, shallow on a small one, and the
 // lookups equal a walk from the root.
 TEST(MhSkipList, LevelChosenByPayloadSize) {
   struct Case {
@@ -146,9 +146,9 @@ TEST(MhSkipList, LevelChosenByPayloadSize) {
     Encoded e = encode_and_parse(tile, MhConstruction::bottom_up);
     const MhTileView& view = e.view;
     const unsigned S = view.skip_level();
-    EXPECT_LE(view.derived_bytes() * 16, e.bytes.size()) << c.size;
+    EXPECT_LE(view.derived_bytes() * 5, e.bytes.size()) << c.size;
     if (S > 0 && S < std::min(view.levels(), 10u)) {
-      EXPECT_GT(view.derived_bytes() * 4 * 16, e.bytes.size()) << c.size << ": one level deeper would fit";
+      EXPECT_GT(view.derived_bytes() * 4 * 5, e.bytes.size()) << c.size << ": one level deeper would fit";
     }
     if (c.size == 1024) {
       EXPECT_GE(S, 7u) << "a large full-depth tile starts below the old fixed level 6";
