@@ -463,7 +463,7 @@ void MhTileView::lit_interleaved_impl(std::span<const TexelQuery> queries, unsig
   };
   // A deep skip list (large tiles: level 8, 768 KiB) is itself a miss per walk: its entry is
   // prefetched here and read a turn later, like the blocks. A small one stays in cache, where
-  // that extra turn per walk would only cost (fzk_haus 16384^2 surfaces, level 5: batch -20%).
+  // that extra turn per walk would only cost (fzk_haus 16384^2 surfaces, level 5: batch -5%).
   const bool skip_entry = skip_level_ >= kPrefetchedSkipLevel && stop >= skip_level_;
   const unsigned skip_shift = levels_ - skip_level_;
   auto start = [&](Lane& lane) {
