@@ -269,9 +269,8 @@ Result<MhTileView> MhTileView::parse(std::span<const uint8_t> payload, const MhP
 
 MhTileView::WalkState MhTileView::start_state(uint32_t u, uint32_t v, unsigned stop, unsigned* level) const {
   if (skip_level_ != 0 && stop >= skip_level_) {
-    const unsigned shift = levels_ - skip_level_;
     *level = skip_level_;
-    return skip_[(size_t(v >> shift) << skip_level_) | (u >> shift)];
+    return skip_[skip_index(u, v)];
   }
   *level = 0;
   return WalkState{root_value_, root_block_, root_mask_};
@@ -465,14 +464,13 @@ void MhTileView::lit_interleaved_impl(std::span<const TexelQuery> queries, unsig
   // prefetched here and read a turn later, like the blocks. A small one stays in cache, where
   // that extra turn per walk would only cost (fzk_haus 16384^2 surfaces, level 5: batch -5%).
   const bool skip_entry = skip_level_ >= kPrefetchedSkipLevel && stop >= skip_level_;
-  const unsigned skip_shift = levels_ - skip_level_;
   auto start = [&](Lane& lane) {
     lane.index = next++;
     lane.u = queries[lane.index].u & mask;
     lane.v = queries[lane.index].v & mask;
     lane.entering = skip_entry;
     if (skip_entry) {
-      __builtin_prefetch(&skip_[(size_t(lane.v >> skip_shift) << skip_level_) | (lane.u >> skip_shift)]);
+      __builtin_prefetch(&skip_[skip_index(lane.u, lane.v)]);
       return;
     }
     lane.s = start_state(lane.u, lane.v, stop, &lane.level);

@@ -122,6 +122,11 @@ class MhTileView {
   void lit_interleaved_impl(std::span<const TexelQuery> queries, unsigned stop, uint8_t* lit) const;
   bool sparse_queries(std::span<const TexelQuery> queries, unsigned stop) const;
   WalkState start_state(uint32_t u, uint32_t v, unsigned max_level, unsigned* level) const;
+  // Entry of skip_ holding texel (u, v) (skip_level_ > 0).
+  size_t skip_index(uint32_t u, uint32_t v) const {
+    const unsigned shift = levels_ - skip_level_;
+    return (size_t(v >> shift) << skip_level_) | (u >> shift);
+  }
 
   const uint8_t* stream_ = nullptr;
   uint32_t size_ = 0;
