@@ -31,9 +31,9 @@ struct MhParseOptions {
   // kMhSkipLevelBySize: the deepest level (at most 10) whose entries take at most a fifth of the
   // payload, so a decoded tile stays within 1.2x its payload while a large, deep tile (a full-depth
   // tree of an open mesh under `anywhere`: 14 MB at 2048^2) starts its walks at level 8 or 9, two
-  // or three blocks above its texels, instead of five. A compact tile (~80 KB) gets level 5, one step more than the
-  // former fixed level 6, whose 48 KiB were not counted and made such tiles ~1.6x their payload. Ignored when the payload embeds a skip list
-  // (that one is validated and used).
+  // or three blocks above its texels, instead of five. A compact tile (~80 KB) gets level 5, one
+  // step more than the former fixed level 6, whose 48 KiB were not counted and made such tiles ~1.6x
+  // their payload. Ignored when the payload embeds a skip list (that one is validated and used).
   unsigned skip_level = kMhSkipLevelBySize;
 };
 
