@@ -57,7 +57,9 @@ struct Merger {
   uint32_t child(uint32_t b, unsigned r) const { return h.child_block[h.block_first_child[b] + r]; }
   DepthInterval& interval(uint32_t b, unsigned v) { return h.intervals[h.block_first_value[b] + v]; }
 
-  void summarize(uint32_t b) {  // recursion depth bounded by the levels (check_structure)
+  // Summary of block b from its children's, which must be summarised already (see merge_mmh: blocks
+  // in reverse breadth-first order, a loop where a recursive walk went depth-first through memory).
+  void summarize(uint32_t b) {
     const uint8_t mask = h.block_mask[b];
     uint64_t hb = mix(0x6d68, mask);
     unsigned ht = 0;
@@ -73,7 +75,6 @@ struct Merger {
     }
     for (unsigned r = 0; r < F::branch_children(mask); ++r) {
       const uint32_t c = child(b, r);
-      summarize(c);
       hb = mix(hb, hash[c]);
       ht = std::max(ht, unsigned(height[c]) + 1);
       hl.lower = std::min(hl.lower, hull[c].lower), hl.upper = std::max(hl.upper, hull[c].upper);
@@ -196,7 +197,7 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
            std::vector<uint8_t>(n, 0),
            std::vector<uint8_t>(index_points ? n : 0, 0),
            std::vector<uint64_t>(index_points ? n : 0, 0)};
-  m.summarize(h.root_block);
+  for (size_t k = order.size(); k-- > 0;) m.summarize(order[k]);  // children before parents
   // Tallest first; among equals, breadth-first order.
   std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return m.height[a] > m.height[b]; });
 
