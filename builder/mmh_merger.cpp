@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include "codec/mh_format.hpp"
+#include "common/huge_page_array.hpp"
 
 namespace shadowtiles {
 namespace F = mh_format;
@@ -236,8 +237,10 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
   };
   std::vector<PointRep> point_reps;
   // Reused per thread: a fresh table would pay a page fault per 4 KiB on every tile.
-  thread_local std::vector<uint64_t> latest_with_points;
-  latest_with_points.assign(index_points ? std::bit_ceil(std::max<size_t>(16, 2 * order.size())) : 0, 0);
+  // In 2 MiB pages where the kernel allows: each probe is a random read of a table of tens of MiB,
+  // which with 4 KiB pages also missed the TLB.
+  thread_local HugePageArray<uint64_t> latest_with_points;
+  latest_with_points.assign_zero(index_points ? std::bit_ceil(std::max<size_t>(16, 2 * order.size())) : 0);
   // The slot for (bucket, point hash): holds its latest point rep, or is the free slot to claim.
   auto slot_hash = [](uint64_t bucket, uint64_t point_hash) { return mix(point_hash, bucket); };
   auto latest_slot = [&](uint64_t bucket, uint64_t point_hash) -> uint64_t& {
