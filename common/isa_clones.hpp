@@ -1,9 +1,10 @@
 // SHADOWTILES_ISA_CLONES: a hot function compiled twice, for x86-64-v3 (popcnt, lzcnt, BMI1/2,
-// AVX2: Haswell, Zen and later) and for the baseline, the copy picked once when the library loads
+// AVX2, FMA: Haswell, Zen and later) and for the baseline, the copy picked once when the library loads
 // (GNU ifunc), the way Embree dispatches its kernels. The installed library still runs on any
 // x86-64. Used where it measured a gain: DAG-MH point and PCF lookups and batch walks (popcounts
 // and variable shifts on every step): +5-8% point rows, +9-11% PCF 3x3 on fzk_haus (docs/client.md);
-// MH and CPVS lookups gained nothing.
+// the DAG-MH encoder's grid search (an fma per multiplier: one instruction instead of a libm call;
+// docs/build-time.md). MH and CPVS lookups gained nothing.
 // GCC only (clang 14's clones are young; the fuzz build is clang). Off with SHADOWTILES_NO_ISA_CLONES
 // (the sanitized build sets it, so it checks the baseline copies).
 #pragma once
