@@ -41,7 +41,7 @@ class HugePageArray {
       capacity_ = bytes / sizeof(T);
     }
     size_ = n;
-    std::memset(static_cast<void*>(data_), 0, n * sizeof(T));
+    if (n > 0) std::memset(static_cast<void*>(data_), 0, n * sizeof(T));  // data_ may be null when n == 0
   }
   size_t size() const { return size_; }
   T& operator[](size_t i) { return data_[i]; }
