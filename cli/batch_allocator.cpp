@@ -6,8 +6,39 @@
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 namespace shadowtiles::cli {
+namespace {
+
+#if defined(__GLIBC__) && defined(__linux__) && defined(MADV_HUGEPAGE)
+// The heap a build grows in its first tiles (hundreds of MiB on a full-depth tree), in 2 MiB pages
+// where the kernel allows: one page fault per 2 MiB instead of per 4 KiB. On this VM a fault costs
+// several microseconds, and the faults of the heap's growth were 7 % of honolulu 16384² `anywhere`'s
+// samples; with glibc's own switch for it (GLIBC_TUNABLES=glibc.malloc.hugetlb=1, which a program
+// cannot set for itself) that build took 7.67 / 7.42 / 7.20 -> 6.59 / 6.40 / 6.55 s. So: one block
+// of kHeapReserve from the heap (M_MMAP_MAX is 0, so it extends the program break), advised as huge
+// pages and freed. It stays in the heap (below the trim threshold), untouched pages cost nothing
+// resident, and the tiles' buffers that later reuse it fault in 2 MiB at a time. Under other
+// allocators (ASan's) the advice lands on memory malloc returns to them: no effect, no harm.
+constexpr size_t kHeapReserve = size_t(768) << 20;
+constexpr uintptr_t kHugePage = uintptr_t(2) << 20;
+
+void back_heap_growth_with_huge_pages() {
+  void* block = std::malloc(kHeapReserve);
+  if (!block) return;
+  const uintptr_t begin = (reinterpret_cast<uintptr_t>(block) + kHugePage - 1) & ~(kHugePage - 1);
+  const uintptr_t end = (reinterpret_cast<uintptr_t>(block) + kHeapReserve) & ~(kHugePage - 1);
+  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // advice only
+  std::free(block);
+}
+#else
+void back_heap_growth_with_huge_pages() {}
+#endif
+
+}  // namespace
 
 void keep_freed_memory_for_reuse() {
 #if defined(__GLIBC__)
@@ -27,6 +58,7 @@ void keep_freed_memory_for_reuse() {
   mallopt(M_MMAP_MAX, 0);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
   mallopt(M_ARENA_MAX, 1);
+  back_heap_growth_with_huge_pages();
 #endif
 }
 

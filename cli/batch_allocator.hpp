@@ -9,8 +9,9 @@
 namespace shadowtiles::cli {
 
 // glibc: freed memory stays in one arena's heap for the next tile instead of going back to the
-// kernel (no mmap for large blocks, a 1 GiB trim threshold, one arena for every thread). Measured
-// in docs/build-time.md (session 20).
+// kernel (no mmap for large blocks, a 1 GiB trim threshold, one arena for every thread), and the
+// heap's first 768 MiB of growth is advised as transparent huge pages. Measured in
+// docs/build-time.md (sessions 20 and 25).
 void keep_freed_memory_for_reuse();
 
 // glibc: blocks up to 32 MiB come from the heap, and up to 4 transactions' worth of free heap (at
