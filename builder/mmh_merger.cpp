@@ -236,13 +236,44 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
     uint32_t rep;  // index in its bucket
   };
   std::vector<PointRep> point_reps;
-  // Reused per thread: a fresh table would pay a page fault per 4 KiB on every tile.
-  // In 2 MiB pages where the kernel allows: each probe is a random read of a table of tens of MiB,
-  // which with 4 KiB pages also missed the TLB.
-  thread_local HugePageArray<uint64_t> latest_with_points;
-  latest_with_points.assign_zero(index_points ? std::bit_ceil(std::max<size_t>(16, 2 * order.size())) : 0);
-  // The slot for (bucket, point hash): holds its latest point rep, or is the free slot to claim.
   auto slot_hash = [](uint64_t bucket, uint64_t point_hash) { return mix(point_hash, bucket); };
+  auto bucket_key_of = [&](uint32_t b) { return mix(m.height[b], m.hash[b] & hash_mask); };
+  // Point-like blocks whose (bucket, point hash) no other block shares can never meet a rep with
+  // their key, nor be one another block finds: they skip the table. On a full-depth tree of distinct
+  // floats that is most blocks, and each probe was a cache miss (a third of the merge's time). Two
+  // bitsets over the key's hash, a few bits per block (cache-resident where the table is tens of
+  // MiB), find them: a hash seen twice (a shared key, or a collision) keeps the block in the table.
+  // `unique_key[b]`: 1 for those blocks.
+  std::vector<uint8_t> unique_key(index_points ? n : 0, 0);
+  size_t keyed_blocks = 0;  // point-like blocks that use the table
+  if (index_points) {
+    size_t point_blocks = 0;
+    for (uint32_t b : order) point_blocks += m.point_like[b];
+    thread_local std::vector<uint64_t> seen, seen_twice;
+    const size_t bits = std::bit_ceil(std::max<size_t>(64, 4 * point_blocks));
+    seen.assign(bits / 64, 0);
+    seen_twice.assign(bits / 64, 0);
+    auto bit_of = [&](uint32_t b) { return size_t(slot_hash(bucket_key_of(b), m.point_hash[b]) >> 7) & (bits - 1); };
+    for (uint32_t b : order) {
+      if (!m.point_like[b]) continue;
+      const size_t i = bit_of(b);
+      const uint64_t bit = uint64_t(1) << (i % 64);
+      seen_twice[i / 64] |= seen[i / 64] & bit;
+      seen[i / 64] |= bit;
+    }
+    for (uint32_t b : order) {
+      if (!m.point_like[b]) continue;
+      const size_t i = bit_of(b);
+      unique_key[b] = (seen_twice[i / 64] >> (i % 64) & 1) == 0;
+      keyed_blocks += !unique_key[b];
+    }
+  }
+  // Reused per thread: a fresh table would pay a page fault per 4 KiB on every tile.
+  // In 2 MiB pages where the kernel allows: each probe is a random read of a table of up to tens of
+  // MiB, which with 4 KiB pages also missed the TLB.
+  thread_local HugePageArray<uint64_t> latest_with_points;
+  latest_with_points.assign_zero(index_points ? std::bit_ceil(std::max<size_t>(16, 2 * keyed_blocks)) : 0);
+  // The slot for (bucket, point hash): holds its latest point rep, or is the free slot to claim.
   auto latest_slot = [&](uint64_t bucket, uint64_t point_hash) -> uint64_t& {
     const size_t mask = latest_with_points.size() - 1;
     const uint64_t full = slot_hash(bucket, point_hash);
@@ -257,13 +288,12 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
   };
   auto slot_rep = [&](uint64_t slot) { return slot == 0 ? kNone : point_reps[uint32_t(slot) - 1].rep; };
   uint64_t scanned = 0;
-  auto bucket_key_of = [&](uint32_t b) { return mix(m.height[b], m.hash[b] & hash_mask); };
   constexpr size_t kPrefetchAhead = 16;  // table slots are DRAM misses: fetch them this many blocks early
   for (size_t position = 0; position < order.size(); ++position) {
     const uint32_t b = order[position];
     if (index_points && position + kPrefetchAhead < order.size()) {
       const uint32_t ahead = order[position + kPrefetchAhead];
-      if (m.point_like[ahead])
+      if (m.point_like[ahead] && !unique_key[ahead])
         __builtin_prefetch(&latest_with_points[slot_hash(bucket_key_of(ahead), m.point_hash[ahead]) &
                                                (latest_with_points.size() - 1)]);
     }
@@ -294,8 +324,9 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
       // that was point-like then fits only blocks with its exact point keys, i.e. its point hash; the
       // others are the reps that were not point-like. Walking both lists most recent first, inside the
       // same window, finds the same first fit as the scan below, without testing the other reps.
-      latest = &latest_slot(bucket_key, m.point_hash[b]);  // at most one slot per block: never full
-      uint32_t same = slot_rep(*latest);
+      // At most one slot per keyed block: never full. A unique key has no slot and no same-key rep.
+      if (!unique_key[b]) latest = &latest_slot(bucket_key, m.point_hash[b]);
+      uint32_t same = latest ? slot_rep(*latest) : kNone;
       size_t other = reps.not_point.size();
       while (!merged) {
         const bool have_same = same != kNone && same >= stop;
@@ -341,9 +372,11 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
     if (merged) continue;
     if (index_points) {
       if (point_like) {
-        reps.previous_same_points.push_back(slot_rep(*latest));
-        point_reps.push_back({bucket_key, m.point_hash[b], uint32_t(reps.size())});
-        *latest = (slot_hash(bucket_key, m.point_hash[b]) >> 32) << 32 | uint64_t(point_reps.size());
+        reps.previous_same_points.push_back(latest ? slot_rep(*latest) : kNone);
+        if (latest) {
+          point_reps.push_back({bucket_key, m.point_hash[b], uint32_t(reps.size())});
+          *latest = (slot_hash(bucket_key, m.point_hash[b]) >> 32) << 32 | uint64_t(point_reps.size());
+        }
       } else {
         reps.previous_same_points.push_back(kNone);
         reps.not_point.push_back(uint32_t(reps.size()));
