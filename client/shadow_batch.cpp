@@ -3,8 +3,9 @@
 //      biased depth, and a histogram of the keys' top bits (buckets; points off the map go to an
 //      extra last bucket);
 //   B. per claimed chunk: stable scatter into the buckets (one counting-sort pass over the batch);
-//   C. workers claim buckets: order the bucket's low key bits in cache (counting passes on the top
-//      digits only, sort_low_bits), then walk its runs
+//   C. workers claim buckets, a few at a time (the next one is fetched while this one is worked):
+//      order the bucket's low key bits in a per-worker buffer that stays in cache (counting passes
+//      on the top digits only, sort_low_bits), then walk its runs
 //      of points per tile: the tile is looked up once per run, point queries go to the decoder's
 //      shared-path walk (lit_sorted), PCF kernels inside the tile to lit_count_sorted (descents to the
 //      kernels' common ancestors shared along the curve), kernels crossing a
@@ -29,6 +30,9 @@ constexpr unsigned kBucketBits = 12;
 constexpr size_t kMinPointsPerChunk = 8192;
 constexpr size_t kChunksPerBatch = 16;
 constexpr size_t kQueryBlock = 256;  // point queries handed to a decoder at once
+// Buckets a worker claims at once: it knows its next bucket, and fetches it ahead (the scatter
+// left the buckets in memory, not in this core's cache).
+constexpr size_t kBucketGroup = 4;
 
 // Orders items[0, n) by the key's low `bits` bits (the bits above are equal), `scratch` of n items:
 // counting passes on 8-bit digits sort just the top digits, enough that about kSmallGroup items
@@ -203,18 +207,29 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
     uint32_t query_index[kQueryBlock];
     uint8_t lit[kQueryBlock];
     uint32_t counts[kQueryBlock];
-    for (size_t b; !failed && (b = next_bucket.fetch_add(1, std::memory_order_relaxed)) < buckets;) {
+    std::vector<BatchItem> scratch;  // the bucket sort's other half, reused: stays in this core's cache
+    for (size_t b = 0, group_end = 0; !failed; ++b) {
+      if (b == group_end) {  // claim the next group of buckets
+        b = next_bucket.fetch_add(kBucketGroup, std::memory_order_relaxed);
+        if (b >= buckets) break;
+        group_end = std::min(buckets, b + kBucketGroup);
+      }
       const uint32_t s = bucket_start[b], e = bucket_start[b + 1];
+      if (b + 1 < group_end)  // the group's next bucket, while this one is sorted and walked
+        for (uint32_t i = e, next_end = bucket_start[b + 2]; i < next_end; i += 64 / sizeof(BatchItem))
+          __builtin_prefetch(&sorted[i]);
       if (s == e) continue;
       // Always ordered, even sparse buckets whose points share no node below the skip-list entry:
       // skipping the sort saved 10-15% of MH/DAG-MH instructions but cost 6-10% of their time.
-      // `bucket` indexes like `sorted` (from 0), into whichever array the sort left the order in.
-      const BatchItem* const bucket = sort_low_bits(&sorted[s], &items[s], e - s, low_bits, tile_key_shift) - s;
+      // `bucket` indexes like `sorted` (from s), into whichever array the sort left the order in.
+      if (scratch.size() < e - s) scratch.resize(e - s);
+      const BatchItem* const ordered = sort_low_bits(&sorted[s], scratch.data(), e - s, low_bits, tile_key_shift);
+      auto bucket = [ordered, s](uint32_t i) -> const BatchItem& { return ordered[i - s]; };
       for (uint32_t run = s; run < e && !failed;) {
-        const uint64_t id = keys.code(bucket[run].key) >> tile_key_shift;
+        const uint64_t id = keys.code(bucket(run).key) >> tile_key_shift;
         uint32_t run_end = run + 1;
-        while (run_end < e && (keys.code(bucket[run_end].key) >> tile_key_shift) == id) ++run_end;
-        const uint32_t tu = keys.u(bucket[run].key) >> tile_shift_, tv = keys.v(bucket[run].key) >> tile_shift_;
+        while (run_end < e && (keys.code(bucket(run_end).key) >> tile_key_shift) == id) ++run_end;
+        const uint32_t tu = keys.u(bucket(run).key) >> tile_shift_, tv = keys.v(bucket(run).key) >> tile_shift_;
         if (id != tile_id) {
           auto found = shared_tile(store::TileKey{method, layout_.tile_level(), tu, tv}, 0);
           if (!found) return fail(found.error());
@@ -224,7 +239,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
         if (kernel == 1) {
           if (coarse) {
             for (uint32_t i = run; i < run_end; ++i) {
-              const BatchItem& item = bucket[i];
+              const BatchItem& item = bucket(i);
               auto value = top_value(method, keys.u(item.key), keys.v(item.key), *level);
               out.lit[item.index] = value ? float(item.threshold <= *value) : 1.0f;
             }
@@ -232,12 +247,14 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
             for (uint32_t i = run; i < run_end;) {
               const size_t block = std::min<size_t>(kQueryBlock, run_end - i);
               for (size_t j = 0; j < block; ++j) {
-                const BatchItem& item = bucket[i + j];
+                const BatchItem& item = bucket(i + j);
                 queries[j] = {keys.u(item.key) & tile_mask, keys.v(item.key) & tile_mask, item.threshold};
                 query_index[j] = item.index;
               }
               tile->lit_sorted({queries, block}, max_level, lit);
-              for (size_t j = 0; j < block; ++j) out.lit[query_index[j]] = lit[j] ? 1.0f : 0.0f;
+              // Without a branch: which points are lit is as good as random here.
+              float* const answers = out.lit.data();
+              for (size_t j = 0; j < block; ++j) answers[query_index[j]] = float(lit[j] != 0);
               i += uint32_t(block);
             }
           }  // empty tile: lit (already 1)
@@ -250,7 +267,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
             block = 0;
           };
           for (uint32_t i = run; i < run_end; ++i) {
-            const BatchItem& item = bucket[i];
+            const BatchItem& item = bucket(i);
             const int64_t gu = keys.u(item.key), gv = keys.v(item.key);
             const int64_t lu = gu & tile_mask, lv = gv & tile_mask;
             uint64_t count;
