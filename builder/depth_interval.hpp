@@ -21,6 +21,10 @@ struct DepthInterval {
 struct TileIntervals {
   uint32_t size = 0;
   std::vector<DepthInterval> texels;
+  // The `surfaces` entry rule's bound per texel (DualDepthOptions::entry_slack), row-major, kept
+  // apart from `lower` (the first hit, which raw stores); empty when the rule is off or applied
+  // (apply_entry_rule in builder/dual_depth_renderer.hpp).
+  std::vector<float> entry_lower = {};
 
   const DepthInterval& at(uint32_t u, uint32_t v) const { return texels[size_t(v) * size + u]; }
   DepthInterval& at(uint32_t u, uint32_t v) { return texels[size_t(v) * size + u]; }

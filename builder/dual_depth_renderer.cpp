@@ -280,6 +280,43 @@ DepthInterval resolve_surfaces_interval(std::vector<ClosedHit>& hits, const Dual
   return interval;
 }
 
+// The entry rule (DualDepthOptions::entry_slack). `first` is the centre ray's first hit, (cu, cv)
+// the texel centre in tile-local texels. When the texel's square lies inside the first hit
+// triangle's footprint, that triangle covers every point of the square, so the visible depth there
+// is at most the triangle's depth, whose largest value over the square is at a corner: a lit
+// receiver is no deeper than that plus `tolerance` (the ground truth's ray offset), and with a
+// query bias of at least `slack` any value from that depth less `slack` lights it. Else (an edge crosses the
+// square, or the triangle is edge-on) lower stays the first hit.
+constexpr double kEntrySquareHalf = 0.51;
+float entry_lower(const TileGeometry& geometry, const ClosedHit& first, double cu, double cv, float lower,
+                  float slack, float tolerance) {
+  const DepthPlane& plane = (first.open ? geometry.open_planes : geometry.closed_planes)[first.prim];
+  if (plane.edge_on) return lower;
+  const float* x = &(first.open ? geometry.open_vertices : geometry.closed_vertices)[size_t(first.prim) * 9];
+  // Edge functions of the footprint (tile-local floats, as Embree saw them) at the square's corners.
+  const double au = x[0], av = x[1], bu = x[3], bv = x[4], cu_ = x[6], cv_ = x[7];
+  const double area = (bu - au) * (cv_ - av) - (bv - av) * (cu_ - au);
+  if (area == 0) return lower;
+  auto inside = [&](double pu, double pv) {
+    const double e0 = ((bu - au) * (pv - av) - (bv - av) * (pu - au)) * area;
+    const double e1 = ((cu_ - bu) * (pv - bv) - (cv_ - bv) * (pu - bu)) * area;
+    const double e2 = ((au - cu_) * (pv - cv_) - (av - cv_) * (pu - cu_)) * area;
+    return e0 > 0 && e1 > 0 && e2 > 0;
+  };
+  // The square grown by a hundredth of a texel: the footprint's float vertices are rounded.
+  for (double du : {-kEntrySquareHalf, kEntrySquareHalf})
+    for (double dv : {-kEntrySquareHalf, kEntrySquareHalf})
+      if (!inside(cu + du, cv + dv)) return lower;
+  // Deepest corner: the centre's depth plus half a texel of slope along each axis.
+  const double deepest = double(lower) + 0.5 * (std::fabs(plane.du) + std::fabs(plane.dv)) + double(tolerance);
+  const double entry = deepest - double(slack);
+  if (entry >= double(lower)) return lower;
+  // Rounded up to a float, so the stored bound is never below the exact one.
+  float bound = float(entry);
+  if (double(bound) < entry) bound = std::nextafter(bound, std::numeric_limits<float>::infinity());
+  return std::max(0.0f, bound);
+}
+
 }  // namespace
 
 void DualDepthStats::add(const DualDepthStats& other) {
@@ -303,6 +340,9 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
   if (buffers) intervals = std::move(buffers->intervals);
   intervals.size = size;
   intervals.texels.assign(size_t(size) * size, DepthInterval{});
+  const bool entry_rule = options_.receivers == ReceiverContract::surfaces && options_.entry_slack > 0;
+  intervals.entry_lower.clear();
+  if (entry_rule) intervals.entry_lower.assign(size_t(size) * size, 1.0f);
   DualDepthStats local;
   if (!scene_.layout().contains(tile))
     return make_error(ErrorCode::invalid_input, "tile outside the map");
@@ -373,6 +413,12 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
           hit.t = (hit.open ? geometry.open_planes : geometry.closed_planes)[hit.prim].at(centre_u, centre_v, hit.t);
         DepthInterval interval = surfaces ? resolve_surfaces_interval(lanes[lane], options_)
                                           : resolve_interval(lanes[lane], open_t, options_);
+        if (entry_rule)
+          intervals.entry_lower[size_t(v) * size + u_start + lane] =
+              interval.lower < 1.0f ? entry_lower(geometry, lanes[lane].front(), double(u_start + lane) + 0.5,
+                                                  double(v) + 0.5, interval.lower, options_.entry_slack,
+                                                  options_.entry_tolerance)
+                                    : interval.lower;
         intervals.at(u_start + lane, v) = interval;
         if (interval.lower < 1.0f) ++local.hits;
       }
@@ -420,6 +466,13 @@ void apply_exit_caps(TileIntervals& intervals, std::span<const float> caps, floa
     if (interval.upper > interval.lower && interval.lower < 1.0f)
       interval.upper = std::max(interval.lower, std::min(interval.upper, caps[i] - exit_margin));
   }
+}
+
+void apply_entry_rule(TileIntervals& intervals) {
+  if (intervals.entry_lower.empty()) return;
+  for (size_t i = 0; i < intervals.texels.size(); ++i)
+    intervals.texels[i].lower = std::min(intervals.texels[i].lower, intervals.entry_lower[i]);
+  intervals.entry_lower.clear();
 }
 
 }  // namespace shadowtiles

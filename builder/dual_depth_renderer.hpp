@@ -69,6 +69,16 @@ struct DualDepthOptions {
   ReceiverContract receivers = ReceiverContract::anywhere;
   // `surfaces`: surfaces closer than this (normalised depth) are one (second_layer::coplanar_epsilon).
   float coplanar_epsilon = 1e-6f;
+  // `surfaces`, the entry rule (docs/receiver-contracts.md; studied, not yet used by builds): the
+  // smallest query bias the values must answer for (normalised depth); 0 = off. Above 0, render()
+  // also fills TileIntervals::entry_lower: for a texel whose square lies inside its first-hit
+  // triangle's footprint, min(first hit, that triangle's deepest corner + entry_tolerance -
+  // entry_slack), else the first hit. Any value from there up to the capped upper answers every
+  // receiver at least as raw does; apply_entry_rule() moves it into the intervals.
+  float entry_slack = 0.0f;
+  // How much deeper than the visible surface a receiver may lie and still count as lit (normalised
+  // depth; the ground truth's occlusion rays start this far off the receiver).
+  float entry_tolerance = 1e-6f;
 };
 
 // A worker's tile-sized buffers, handed back between tiles: a 4096^2 tile's intervals (128 MiB) and
@@ -102,5 +112,9 @@ class DualDepthRenderer {
 
 // upper = max(lower, min(upper, cap - margin)) for every hit texel with an exit (caps per texel, row-major).
 void apply_exit_caps(TileIntervals& intervals, std::span<const float> caps, float exit_margin);
+// lower = min(lower, entry_lower) per texel, then entry_lower is emptied (nothing to do when empty).
+// After it, lower is no longer the first hit: raw and the other first-hit methods are encoded from
+// the intervals before, the interval methods (MH, MMH, DAG-MH) from a copy after.
+void apply_entry_rule(TileIntervals& intervals);
 
 }  // namespace shadowtiles

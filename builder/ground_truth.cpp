@@ -7,15 +7,19 @@
 
 namespace shadowtiles {
 
+double ground_truth_offset(const Scene& scene) {
+  double diagonal = 0;
+  for (int i = 0; i < 3; ++i) diagonal += std::pow(scene.bounds.max[i] - scene.bounds.min[i], 2);
+  return kGroundTruthOffsetPerDiagonal * std::sqrt(diagonal);
+}
+
 GroundTruth::GroundTruth(const EmbreeDevice& device, const Scene& scene, const Vec3& light_direction)
     : scene_(rtcNewScene(device.get())) {
   centre_ = scene_centre(scene);
   double length = std::sqrt(light_direction[0] * light_direction[0] + light_direction[1] * light_direction[1] +
                             light_direction[2] * light_direction[2]);
   for (int i = 0; i < 3; ++i) to_sun_[i] = -light_direction[i] / length;
-  double diagonal = 0;
-  for (int i = 0; i < 3; ++i) diagonal += std::pow(scene.bounds.max[i] - scene.bounds.min[i], 2);
-  epsilon_ = 1e-5 * std::sqrt(diagonal);
+  epsilon_ = ground_truth_offset(scene);
 
   commit_world_triangles(device, scene_, scene, centre_);
 }

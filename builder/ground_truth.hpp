@@ -10,6 +10,11 @@
 
 namespace shadowtiles {
 
+// How far toward the sun an occlusion ray starts, per unit of the scene's bounding-box diagonal.
+inline constexpr double kGroundTruthOffsetPerDiagonal = 1e-5;
+// That offset for `scene` in world units.
+double ground_truth_offset(const Scene& scene);
+
 class GroundTruth {
  public:
   // `light_direction`: the direction light travels (toward the scene).

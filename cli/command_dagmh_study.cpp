@@ -7,7 +7,8 @@
 // lines out of stdout). Lookup rates: the fastest of three passes per tile. `--receivers` renders under
 // either receiver contract (docs/receiver-contracts.md); the report also counts the MH's values by
 // their interval's width (zero, under 8 exit margins, wider, misses), which is where DAG-MH's value
-// bytes go (docs/dagmh.md, "Under the surfaces contract").
+// bytes go (docs/dagmh.md, "Under the surfaces contract"). `--entry-slack-texels` studies the entry
+// rule's lower bounds (docs/receiver-contracts.md, "The entry rule"), which builds do not use yet.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -20,10 +21,12 @@
 #include <spdlog/spdlog.h>
 
 #include "builder/build_job.hpp"
+#include "builder/cpvs_encoder.hpp"
 #include "builder/dagmh_encoder.hpp"
 #include "builder/dagmh_sharing_study.hpp"
 #include "builder/dual_depth_renderer.hpp"
 #include "builder/embree_device.hpp"
+#include "builder/ground_truth.hpp"
 #include "builder/light_space_scene.hpp"
 #include "builder/mh_builder.hpp"
 #include "builder/mh_encoder.hpp"
@@ -52,6 +55,7 @@ struct StudyFlags {
   uint64_t sample_tiles = 0;   // 0: every non-empty tile
   unsigned lookups = 20000;    // per tile, per kind and parameter point
   double exit_margin_texels = 4.0;
+  double entry_slack_texels = 0.0;
   bool json = false;
 };
 
@@ -117,6 +121,7 @@ struct ResolutionResult {
   uint32_t resolution = 0;
   uint64_t tiles = 0, tiles_nonempty = 0;
   uint64_t mh_bytes = 0;
+  uint64_t cpvs_bytes = 0;  // the peer DAG-MH is compared with, from the same intervals
   PointTotals mmh;
   std::map<std::pair<unsigned, unsigned>, PointTotals> dag;
   DagMhSharingFigures sharing;  // one shape dictionary for all tiles, at the default treelet height
@@ -142,6 +147,12 @@ Result<ResolutionResult> study_resolution(const StudyFlags& flags, const Scene& 
   depth_options.receivers = parse_receiver_contract(flags.receivers).value_or(ReceiverContract::anywhere);
   depth_options.coplanar_epsilon = float(
       second_layer::coplanar_epsilon(frame->depth_from_world(build_defaults.bias_texels * frame->texel_size())));
+  if (depth_options.receivers == ReceiverContract::surfaces && flags.entry_slack_texels > 0) {
+    depth_options.entry_slack = float(frame->depth_from_world(flags.entry_slack_texels * frame->texel_size()));
+    // A receiver the ground truth lights may lie its ray's offset behind the visible surface.
+    depth_options.entry_tolerance =
+        float(frame->depth_from_world(ground_truth_offset(scene)) + second_layer::kSameSurface);
+  }
   DualDepthRenderer renderer(device, light_scene, depth_options);
 
   std::vector<TileCoord> tiles;
@@ -164,11 +175,15 @@ Result<ResolutionResult> study_resolution(const StudyFlags& flags, const Scene& 
     if (!intervals) return intervals.error();
     if (intervals->all_missed()) continue;
     ++r.tiles_nonempty;
+    apply_entry_rule(*intervals);  // (nothing without --entry-slack-texels)
     auto mh = build_mh(*intervals);
     if (!mh) return mh.error();
     auto mh_bytes = encode_mh(*mh);
     if (!mh_bytes) return mh_bytes.error();
     r.mh_bytes += mh_bytes->size();
+    auto cpvs = encode_cpvs_tile(*intervals, resolution);
+    if (!cpvs) return cpvs.error();
+    r.cpvs_bytes += cpvs->size();
     auto classify = [&](const DepthInterval& iv) {
       if (!std::isfinite(iv.upper)) ++r.values_miss;
       else if (iv.upper == iv.lower) ++r.values_zero;
@@ -221,12 +236,14 @@ nlohmann::json to_json(const ResolutionResult& r) {
                       {"chunk_size", key.second},
                       {"bytes", t.bytes},
                       {"ratio_vs_mmh", r.mmh.bytes > 0 ? double(t.bytes) / double(r.mmh.bytes) : 0.0},
+                      {"ratio_vs_cpvs", r.cpvs_bytes > 0 ? double(t.bytes) / double(r.cpvs_bytes) : 0.0},
                       {"point_random_per_second", t.point.per_second()},
                       {"pcf3_random_per_second", t.pcf3.per_second()}});
   return {{"resolution", r.resolution},
           {"tiles", r.tiles},
           {"tiles_nonempty", r.tiles_nonempty},
           {"mh_bytes", r.mh_bytes},
+          {"cpvs_bytes", r.cpvs_bytes},
           {"mh_values",
            {{"zero_width", r.values_zero}, {"narrow", r.values_narrow}, {"wide", r.values_wide}, {"miss", r.values_miss}}},
           {"mmh_bytes", r.mmh.bytes},
@@ -247,18 +264,21 @@ nlohmann::json to_json(const ResolutionResult& r) {
 }
 
 void print_text(const ResolutionResult& r) {
-  std::printf("%u^2: %llu tiles studied (%llu non-empty), %.0f s; MH %llu B, MMH %llu B "
+  std::printf("%u^2: %llu tiles studied (%llu non-empty), %.0f s; MH %llu B, MMH %llu B, CPVS %llu B "
               "(MMH lookups: point %.2f M/s, PCF 3x3 %.2f M/s)\n",
               r.resolution, (unsigned long long)r.tiles, (unsigned long long)r.tiles_nonempty, r.seconds,
-              (unsigned long long)r.mh_bytes, (unsigned long long)r.mmh.bytes, r.mmh.point.per_second() / 1e6,
+              (unsigned long long)r.mh_bytes, (unsigned long long)r.mmh.bytes, (unsigned long long)r.cpvs_bytes,
+              r.mmh.point.per_second() / 1e6,
               r.mmh.pcf3.per_second() / 1e6);
   std::printf("MH values by interval width: zero %llu, narrow (< 8 exit margins) %llu, wide %llu, misses %llu\n",
               (unsigned long long)r.values_zero, (unsigned long long)r.values_narrow, (unsigned long long)r.values_wide,
               (unsigned long long)r.values_miss);
-  std::printf("%7s %6s %14s %10s %12s %12s\n", "height", "chunk", "bytes", "DAG/MMH", "point M/s", "pcf3 M/s");
+  std::printf("%7s %6s %14s %10s %10s %12s %12s\n", "height", "chunk", "bytes", "DAG/MMH", "DAG/CPVS", "point M/s",
+              "pcf3 M/s");
   for (const auto& [key, t] : r.dag)
-    std::printf("%7u %6u %14llu %10.4f %12.2f %12.2f\n", key.first, key.second, (unsigned long long)t.bytes,
-                r.mmh.bytes > 0 ? double(t.bytes) / double(r.mmh.bytes) : 0.0, t.point.per_second() / 1e6,
+    std::printf("%7u %6u %14llu %10.4f %10.4f %12.2f %12.2f\n", key.first, key.second, (unsigned long long)t.bytes,
+                r.mmh.bytes > 0 ? double(t.bytes) / double(r.mmh.bytes) : 0.0,
+                r.cpvs_bytes > 0 ? double(t.bytes) / double(r.cpvs_bytes) : 0.0, t.point.per_second() / 1e6,
                 t.pcf3.per_second() / 1e6);
   const DagMhSharingFigures& f = r.sharing;
   std::printf("shared shape dictionary (treelet height %u): per-tile topology %llu B (%llu nodes, %llu treelets); "
@@ -339,6 +359,11 @@ void add_dagmh_study_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--exit-margin-texels", flags->exit_margin_texels, "As for build")->capture_default_str();
   cmd->add_option("--receivers", flags->receivers, "Receiver contract, as for build: anywhere or surfaces")
+      ->capture_default_str();
+  cmd->add_option("--entry-slack-texels", flags->entry_slack_texels,
+                  "surfaces only: study the entry rule for query biases of at least this many texels "
+                  "(docs/receiver-contracts.md; 0: off, as builds are)")
+      ->check(CLI::Range(0.0, 64.0))
       ->capture_default_str();
   cmd->add_flag("--json", flags->json, "Print JSON");
   cmd->callback([flags, &exit_code] { exit_code = run(*flags); });

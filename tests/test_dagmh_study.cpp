@@ -138,7 +138,7 @@ TEST(DagMhStudy, SurfacesContractMatchesASurfacesBuildAndCountsEveryValue) {
   const std::string store = (dir.path() / "s").string();
   std::string output;
   ASSERT_EQ(testing::run_command(testing::cli_path().string() + " build " + scene +
-                                     " --up y -r 512 --tile 256 -m dagmh --receivers surfaces -q --out " + store,
+                                     " --up y -r 512 --tile 256 -m dagmh,cpvs --receivers surfaces -q --out " + store,
                                  &output),
             0)
       << output;
@@ -146,6 +146,7 @@ TEST(DagMhStudy, SurfacesContractMatchesASurfacesBuildAndCountsEveryValue) {
   ASSERT_EQ(testing::run_command(testing::cli_path().string() + " inspect --json " + store + " 2>/dev/null", &output), 0)
       << output;
   const auto dagmh = nlohmann::json::parse(output)["methods"]["dagmh"];
+  const auto cpvs = nlohmann::json::parse(output)["methods"]["cpvs"];
   output.clear();
   ASSERT_EQ(testing::run_command(testing::cli_path().string() + " dagmh-study " + scene +
                                      " --up y -r 512 --tile 256 --heights 4 --chunks 32 --lookups 100 --receivers surfaces"
@@ -156,6 +157,8 @@ TEST(DagMhStudy, SurfacesContractMatchesASurfacesBuildAndCountsEveryValue) {
   const auto r512 = nlohmann::json::parse(output)["resolutions"][0];
   ASSERT_EQ(r512["points"].size(), 1u);
   EXPECT_EQ(r512["points"][0]["bytes"].get<uint64_t>(), dagmh["payload_bytes"].get<uint64_t>());
+  // The peer DAG-MH is compared with, from the same intervals.
+  EXPECT_EQ(r512["cpvs_bytes"].get<uint64_t>(), cpvs["payload_bytes"].get<uint64_t>());
   const auto& values = r512["mh_values"];
   const uint64_t zero = values["zero_width"], narrow = values["narrow"], wide = values["wide"], miss = values["miss"];
   EXPECT_EQ(zero + narrow + wide + miss, dagmh["dag"]["values"].get<uint64_t>());
@@ -167,6 +170,30 @@ TEST(DagMhStudy, SurfacesContractMatchesASurfacesBuildAndCountsEveryValue) {
                                  &output),
             2)
       << output;
+}
+
+// The entry rule (docs/receiver-contracts.md) studied on fzk_haus: under `surfaces` it widens the
+// thin layers' zero-width intervals, so DAG-MH shrinks more than CPVS from the same intervals;
+// under `anywhere` it does nothing.
+TEST(DagMhStudy, EntryRuleWidensZeroWidthIntervalsUnderSurfacesOnly) {
+  const std::string scene = testing::shared_scene("fzk_haus/fzk_haus.obj").string();
+  auto study = [&](const std::string& args) {
+    std::string output;
+    EXPECT_EQ(testing::run_command(testing::cli_path().string() + " dagmh-study " + scene +
+                                       " --up y -r 512 --tile 256 --heights 4 --chunks 32 --lookups 100 --json -q " +
+                                       args + " 2>/dev/null",
+                                   &output),
+              0)
+        << output;
+    return nlohmann::json::parse(output)["resolutions"][0];
+  };
+  const auto off = study("--receivers surfaces"), on = study("--receivers surfaces --entry-slack-texels 2");
+  EXPECT_LT(on["mh_values"]["zero_width"].get<uint64_t>(), off["mh_values"]["zero_width"].get<uint64_t>() / 2);
+  EXPECT_LT(on["points"][0]["bytes"].get<uint64_t>(), off["points"][0]["bytes"].get<uint64_t>());
+  EXPECT_LT(on["points"][0]["ratio_vs_cpvs"].get<double>(), off["points"][0]["ratio_vs_cpvs"].get<double>());
+  const auto anywhere = study("--receivers anywhere"), anywhere_on = study("--receivers anywhere --entry-slack-texels 2");
+  EXPECT_EQ(anywhere_on["points"][0]["bytes"], anywhere["points"][0]["bytes"]);
+  EXPECT_EQ(anywhere_on["cpvs_bytes"], anywhere["cpvs_bytes"]);
 }
 
 }  // namespace

@@ -1,0 +1,207 @@
+// The `surfaces` contract's entry rule (DualDepthOptions::entry_slack, docs/receiver-contracts.md,
+// "The entry rule"), on an analytic scene under a sun straight above:
+// - every receiver the truth lights and raw lights (query bias = the slack) is still lit by the
+//   lowered bound, including beside a step whose lower side is visible inside the upper side's
+//   texels (where the first-hit triangle does not cover the square, so the bound must stay);
+// - texels inside one triangle get exactly the triangle's deepest corner + tolerance - slack;
+// - texels crossed by a triangle edge keep the first hit; the first hit itself stays in `lower`
+//   until apply_entry_rule (raw is encoded from it);
+// - on a real open scene (fzk_haus, 512^2), receivers sampled by area that Embree's ground truth
+//   lights and raw lights stay lit.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "builder/dual_depth_renderer.hpp"
+#include "builder/embree_device.hpp"
+#include "builder/ground_truth.hpp"
+#include "builder/light_space_scene.hpp"
+#include "builder/receiver_sampler.hpp"
+#include "builder/scene.hpp"
+#include "builder/scene_loader.hpp"
+#include "builder/second_layer_rule.hpp"
+#include "tests/testing_support.hpp"
+
+namespace shadowtiles {
+namespace {
+
+using Triangles = std::vector<std::array<uint32_t, 3>>;
+
+constexpr uint32_t kResolution = 64;
+constexpr double kSlope = 0.02;  // world height per world unit along x: far under the slack per texel
+
+// The upper surface: z = 2 + kSlope * x over x in [0, kStepX] (one quad, two triangles), a step down
+// by `kStep` world units to a lower surface over x in [kStepX, 10] with the same slope; under both a second
+// layer (half the step lower: the thin layer whose interval has zero width) and a floor at z = 0.
+double upper_z(double x) { return 2 + kSlope * x; }
+constexpr double kStep = 0.05;
+constexpr double kStepX = 5.1;  // inside a texel (texels are 12.x / 64 wide, starting at x = -1)
+
+void add_quad(Scene& scene, const std::string& name, double x0, double x1, double y0, double y1, double drop) {
+  std::vector<Vec3> v{{x0, y0, upper_z(x0) - drop}, {x1, y0, upper_z(x1) - drop}, {x0, y1, upper_z(x0) - drop},
+                      {x1, y1, upper_z(x1) - drop}};
+  scene.add_mesh(name, v, Triangles{{0, 1, 3}, {0, 3, 2}});
+}
+
+Scene step_scene() {
+  Scene scene;
+  scene.add_mesh("floor", {{-1, -1, 0}, {11, -1, 0}, {-1, 11, 0}, {11, 11, 0}}, Triangles{{0, 1, 3}, {0, 3, 2}});
+  // A small lid high above a corner: the surfaces then lie well below the near plane, so their
+  // bounds are not clamped at depth 0.
+  scene.add_mesh("lid", {{-1, -1, 10}, {-0.8, -1, 10}, {-1, -0.8, 10}}, Triangles{{0, 1, 2}});
+  add_quad(scene, "upper", 0, kStepX, 0, 10, 0);
+  add_quad(scene, "lower", kStepX, 10, 0, 10, kStep);
+  add_quad(scene, "under_upper", 0.2, 4.8, 0.2, 9.8, kStep / 2);
+  return scene;
+}
+
+struct Rendered {
+  LightFrame frame;
+  double slack = 0, tolerance = 0;  // normalised depth
+  TileIntervals intervals;          // render(): first hits in lower, the rule's bounds beside
+};
+
+Rendered render(const Scene& scene) {
+  auto frame = LightFrame::fit({0, 0, -1}, scene.bounds, kResolution);
+  EXPECT_TRUE(frame.ok());
+  auto layout = TileLayout::make(kResolution, kResolution);
+  LightSpaceScene light_scene(scene, *frame, *layout);
+  auto device = EmbreeDevice::create();
+  EXPECT_TRUE(device.ok());
+  // The slack: two texels of depth, the build's default query bias; the step (0.05) is under it.
+  const double slack = frame->depth_from_world(2 * frame->texel_size());
+  DualDepthOptions options;
+  options.exit_margin = float(2 * slack);
+  options.cap_exits_at_receiver_surfaces = true;
+  options.receivers = ReceiverContract::surfaces;
+  options.coplanar_epsilon = float(second_layer::coplanar_epsilon(slack));
+  options.entry_slack = float(slack);
+  options.entry_tolerance = float(frame->depth_from_world(ground_truth_offset(scene)) + second_layer::kSameSurface);
+  DualDepthRenderer renderer(*device, light_scene, options);
+  auto intervals = renderer.render({0, 0});
+  EXPECT_TRUE(intervals.ok());
+  return {*frame, slack, options.entry_tolerance, std::move(*intervals)};
+}
+
+TEST(EntryRule, EveryLitReceiverRawLightsStaysLit) {
+  const Scene scene = step_scene();
+  Rendered r = render(scene);
+  ASSERT_EQ(r.intervals.entry_lower.size(), r.intervals.texels.size());
+  TileIntervals lowered = r.intervals;
+  apply_entry_rule(lowered);
+  EXPECT_TRUE(lowered.entry_lower.empty());
+  // Receivers on the visible surfaces (nothing lies above them), on a grid finer than the texels.
+  uint64_t raw_lit = 0, below_first_hit = 0;
+  for (double x = 0.003; x < 10; x += 0.0173)
+    for (double y = 0.003; y < 10; y += 0.0411) {
+      const double z = x < kStepX ? upper_z(x) : upper_z(x) - kStep;
+      const LightSpacePoint p = r.frame.to_light({x, y, z});
+      const uint32_t u = uint32_t(p.u), v = uint32_t(p.v);
+      const float threshold = float(p.depth - r.slack);  // the client's comparison, bias = the slack
+      const DepthInterval& first = r.intervals.at(u, v);
+      if (!(threshold <= first.lower)) continue;  // raw shadows it: nothing to keep
+      ++raw_lit;
+      ASSERT_LE(threshold, lowered.at(u, v).lower) << "x " << x << " y " << y << " texel " << u << "," << v;
+      below_first_hit += lowered.at(u, v).lower < first.lower;
+    }
+  EXPECT_GT(raw_lit, 50000u);
+  EXPECT_GT(below_first_hit, raw_lit / 2);  // the rule lowers most of them
+}
+
+TEST(EntryRule, InsideATriangleTheBoundIsItsDeepestCornerLessTheSlack) {
+  const Scene scene = step_scene();
+  Rendered r = render(scene);
+  uint64_t inside = 0, on_edges = 0;
+  for (uint32_t v = 0; v < kResolution; ++v)
+    for (uint32_t u = 0; u < kResolution; ++u) {
+      const DepthInterval& first = r.intervals.at(u, v);
+      const float entry = r.intervals.entry_lower[size_t(v) * kResolution + u];
+      if (first.lower >= 1.0f) {
+        EXPECT_EQ(entry, first.lower);  // a miss stays a miss
+        continue;
+      }
+      EXPECT_LE(entry, first.lower);
+      // The texel's square in world x and y, grown by `grow` texels on each side.
+      const Vec3 lo = r.frame.to_world({double(u), double(v), 0.5}), hi = r.frame.to_world({u + 1.0, v + 1.0, 0.5});
+      if (std::max(lo[0], hi[0]) < 0.2 || std::min(lo[0], hi[0]) > 9.8 || std::max(lo[1], hi[1]) < 0.2 ||
+          std::min(lo[1], hi[1]) > 9.8)
+        continue;  // the floor's edges and border
+      // Whether an edge of the upper and lower quads (their outline at x = 0, kStepX, 10 and the
+      // diagonals from (x0q, 0) to (x1q, 10)) meets the grown square.
+      auto crossed = [&](double grow) {
+        const double g = grow * r.frame.texel_size();
+        const double x0 = std::min(lo[0], hi[0]) - g, x1 = std::max(lo[0], hi[0]) + g;
+        const double y0 = std::min(lo[1], hi[1]) - g, y1 = std::max(lo[1], hi[1]) + g;
+        auto crosses_diagonal = [&](double qx0, double qx1) {
+          auto side = [&](double x, double y) { return (qx1 - qx0) * y - 10 * (x - qx0); };
+          const double s00 = side(x0, y0), s01 = side(x0, y1), s10 = side(x1, y0), s11 = side(x1, y1);
+          const bool mixed = std::min({s00, s01, s10, s11}) <= 0 && std::max({s00, s01, s10, s11}) >= 0;
+          return mixed && x1 > qx0 && x0 < qx1;
+        };
+        return (x0 <= kStepX && x1 >= kStepX) || (x0 <= 0 && x1 >= 0) || crosses_diagonal(0, kStepX) ||
+               crosses_diagonal(kStepX, 10);
+      };
+      if (crossed(0)) {
+        ++on_edges;
+        EXPECT_EQ(entry, first.lower) << u << "," << v;  // the square is not inside one triangle
+        continue;
+      }
+      if (crossed(0.02)) continue;  // within the renderer's rounding margin (a hundredth of a texel)
+      const double x0 = std::min(lo[0], hi[0]), y0 = std::min(lo[1], hi[1]);
+      ++inside;
+      // The plane's deepest corner over the square: the sun is straight above and z grows with x,
+      // so it is the lowest point, at the square's smallest x.
+      const double deepest = r.frame.to_light({x0, y0, x0 < kStepX ? upper_z(x0) : upper_z(x0) - kStep}).depth;
+      const double expected = deepest + r.tolerance - r.slack;
+      EXPECT_NEAR(entry, expected, 4e-7) << u << "," << v;
+      EXPECT_GE(double(entry), expected - 1e-7) << u << "," << v;  // rounded up, never below
+    }
+  EXPECT_GT(inside, 1500u);
+  EXPECT_GT(on_edges, 100u);
+}
+
+TEST(EntryRule, OnARealOpenSceneGroundTruthLitReceiversRawLightsStayLit) {
+  LoadOptions load;
+  load.up = UpAxis::y;
+  auto scene = load_scene(testing::shared_scene("fzk_haus/fzk_haus.obj"), load);
+  ASSERT_TRUE(scene.ok()) << scene.error().message;
+  auto light = light_direction_from_sun(135, 45, UpAxis::y);
+  ASSERT_TRUE(light.ok());
+  constexpr uint32_t kMap = 512;
+  auto frame = LightFrame::fit(*light, scene->bounds, kMap);
+  ASSERT_TRUE(frame.ok());
+  auto layout = TileLayout::make(kMap, kMap);
+  LightSpaceScene light_scene(*scene, *frame, *layout);
+  auto device = EmbreeDevice::create();
+  ASSERT_TRUE(device.ok());
+  const double bias = frame->depth_from_world(2 * frame->texel_size());  // the build's default bias
+  DualDepthOptions options;
+  options.exit_margin = float(frame->depth_from_world(4 * frame->texel_size()));
+  options.cap_exits_at_receiver_surfaces = true;
+  options.receivers = ReceiverContract::surfaces;
+  options.coplanar_epsilon = float(second_layer::coplanar_epsilon(bias));
+  options.entry_slack = float(bias);
+  options.entry_tolerance = float(frame->depth_from_world(ground_truth_offset(*scene)) + second_layer::kSameSurface);
+  DualDepthRenderer renderer(*device, light_scene, options);
+  auto first = renderer.render({0, 0});
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  TileIntervals lowered = *first;
+  apply_entry_rule(lowered);
+  GroundTruth truth(*device, *scene, *light);
+  uint64_t kept = 0, lowered_texels = 0;
+  for (const Receiver& receiver : sample_receivers(*scene, 20000, 11)) {
+    const LightSpacePoint p = frame->to_light(receiver.position);
+    if (!(p.u >= 0 && p.u < kMap && p.v >= 0 && p.v < kMap)) continue;
+    const uint32_t u = uint32_t(p.u), v = uint32_t(p.v);
+    const float threshold = float(std::min(p.depth, 1.0) - bias);  // the client's comparison
+    if (!(threshold <= first->at(u, v).lower) || !truth.lit(receiver.position)) continue;
+    ++kept;
+    lowered_texels += lowered.at(u, v).lower < first->at(u, v).lower;
+    EXPECT_LE(threshold, lowered.at(u, v).lower) << "receiver at texel " << u << "," << v;
+  }
+  EXPECT_GT(kept, 2000u);
+  EXPECT_GT(lowered_texels, kept / 2);
+}
+
+}  // namespace
+}  // namespace shadowtiles
