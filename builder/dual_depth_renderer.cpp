@@ -281,15 +281,15 @@ DepthInterval resolve_surfaces_interval(std::vector<ClosedHit>& hits, const Dual
 }
 
 // The entry rule (DualDepthOptions::entry_slack). `first` is the centre ray's first hit, (cu, cv)
-// the texel centre in tile-local texels. When the texel's square lies inside the first hit
+// the texel centre in tile-local texels, (global_u, global_v) in the map's. When the texel's square lies inside the first hit
 // triangle's footprint, that triangle covers every point of the square, so the visible depth there
 // is at most the triangle's depth, whose largest value over the square is at a corner: a lit
 // receiver is no deeper than that plus `tolerance` (the ground truth's ray offset), and with a
 // query bias of at least `slack` any value from that depth less `slack` lights it. Else (an edge crosses the
 // square, or the triangle is edge-on) lower stays the first hit.
 constexpr double kEntrySquareHalf = 0.51;
-float entry_lower(const TileGeometry& geometry, const ClosedHit& first, double cu, double cv, float lower,
-                  float slack, float tolerance) {
+float entry_lower(const TileGeometry& geometry, const ClosedHit& first, double cu, double cv, double global_u,
+                  double global_v, float lower, float slack, float tolerance) {
   const DepthPlane& plane = (first.open ? geometry.open_planes : geometry.closed_planes)[first.prim];
   if (plane.edge_on) return lower;
   const float* x = &(first.open ? geometry.open_vertices : geometry.closed_vertices)[size_t(first.prim) * 9];
@@ -307,14 +307,18 @@ float entry_lower(const TileGeometry& geometry, const ClosedHit& first, double c
   for (double du : {-kEntrySquareHalf, kEntrySquareHalf})
     for (double dv : {-kEntrySquareHalf, kEntrySquareHalf})
       if (!inside(cu + du, cv + dv)) return lower;
-  // Deepest corner: the centre's depth plus half a texel of slope along each axis.
-  const double deepest = double(lower) + 0.5 * (std::fabs(plane.du) + std::fabs(plane.dv)) + double(tolerance);
+  // Deepest corner: the plane's depth at the centre (in double, not the stored float) plus half a
+  // texel of slope along each axis.
+  const double centre = plane.depth + plane.du * (global_u - plane.u) + plane.dv * (global_v - plane.v);
+  const double deepest = centre + 0.5 * (std::fabs(plane.du) + std::fabs(plane.dv)) + double(tolerance);
   const double entry = deepest - double(slack);
   if (entry >= double(lower)) return lower;
-  // Rounded up to a float, so the stored bound is never below the exact one.
+  // Rounded up to a float and one float step more: never below the exact bound, nor below verify's
+  // reference (builder/reference_entry_bounds.hpp), which evaluates the same plane another way.
   float bound = float(entry);
   if (double(bound) < entry) bound = std::nextafter(bound, std::numeric_limits<float>::infinity());
-  return std::max(0.0f, bound);
+  bound = std::nextafter(bound, std::numeric_limits<float>::infinity());
+  return std::clamp(bound, 0.0f, lower);
 }
 
 }  // namespace
@@ -416,8 +420,8 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
         if (entry_rule)
           intervals.entry_lower[size_t(v) * size + u_start + lane] =
               interval.lower < 1.0f ? entry_lower(geometry, lanes[lane].front(), double(u_start + lane) + 0.5,
-                                                  double(v) + 0.5, interval.lower, options_.entry_slack,
-                                                  options_.entry_tolerance)
+                                                  double(v) + 0.5, centre_u, centre_v, interval.lower,
+                                                  options_.entry_slack, options_.entry_tolerance)
                                     : interval.lower;
         intervals.at(u_start + lane, v) = interval;
         if (interval.lower < 1.0f) ++local.hits;
