@@ -57,6 +57,10 @@ Status validate(const BuildConfig& config) {
     return make_error(ErrorCode::invalid_input, "give exactly one of resolution and texel size");
   if (!(config.bias_texels >= 0) || !(config.exit_margin_texels >= config.bias_texels))
     return make_error(ErrorCode::invalid_input, "need 0 <= bias <= exit margin (in texels)");
+  if (!(config.entry_slack_texels >= 0) || config.entry_slack_texels > config.bias_texels)
+    return make_error(ErrorCode::invalid_input, "need 0 <= entry slack <= bias (in texels)");
+  if (config.entry_slack_texels > 0 && config.receivers != ReceiverContract::surfaces)
+    return make_error(ErrorCode::invalid_input, "the entry slack needs --receivers surfaces");
   if (config.store_path.empty() && !config.plan_shards_only)
     return make_error(ErrorCode::invalid_input, "no output store given");
   return {};
@@ -88,6 +92,7 @@ nlohmann::json build_identity(const BuildConfig& config, uint64_t scene_hash, ui
   if (config.open_exit_at_far_plane) identity["open_exit_at_far_plane"] = true;
   if (config.cap_exits_at_receiver_surfaces) identity["exit_caps"] = "receiver_surfaces";
   if (config.receivers != ReceiverContract::anywhere) identity["receivers"] = receiver_contract_name(config.receivers);
+  if (config.entry_slack_texels > 0) identity["entry_slack_texels"] = config.entry_slack_texels;
   if (closes_nearly_closed(config))
     identity["nearly_closed"] = {{"tolerance", config.nearly_closed.tolerance},
                                  {"max_ambiguous_area", config.nearly_closed.max_ambiguous_area},
@@ -286,6 +291,7 @@ StoreMeta initial_meta(const BuildConfig& config, const PreparedBuild& build) {
   meta.exit_margin = config.exit_margin_texels * build.frame.texel_size();
   meta.receivers = config.receivers;
   meta.exit_caps = config.cap_exits_at_receiver_surfaces && !config.open_exit_at_far_plane;
+  meta.entry_slack = config.entry_slack_texels * build.frame.texel_size();
   meta.nearly_closed = closes_nearly_closed(config);
   if (meta.nearly_closed) {
     meta.nearly_closed_tolerance = config.nearly_closed.tolerance;
@@ -371,6 +377,8 @@ DualDepthOptions depth_options_for(const BuildConfig& config, const LightFrame& 
   options.cap_exits_at_receiver_surfaces = config.cap_exits_at_receiver_surfaces;
   options.receivers = config.receivers;
   options.coplanar_epsilon = float(second_layer::coplanar_epsilon(frame.depth_from_world(meta.default_bias)));
+  options.entry_slack = float(frame.depth_from_world(meta.entry_slack));
+  options.entry_tolerance = float(entry_tolerance_depth(frame, meta.scene_bounds));
   return options;
 }
 

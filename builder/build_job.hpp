@@ -42,6 +42,9 @@ struct BuildConfig {
   LoadOptions load;
   double bias_texels = 2.0;         // default query bias, in texel widths (stored in world units)
   double exit_margin_texels = 4.0;  // closed-mesh exits pulled back by this (>= the bias)
+  // `surfaces` only: the entry rule's slack in texel widths (docs/receiver-contracts.md), at most the
+  // bias (queries need a bias of at least the slack); 0 = off.
+  double entry_slack_texels = 0.0;
   int zstd_level = 3;
   MhConstruction construction = MhConstruction::bottom_up;  // MH family: bottom-up or top-down
   uint64_t initial_map_size = 1ull << 30;

@@ -8,7 +8,9 @@
 #include <vector>
 
 #include "builder/receiver_surface_caps.hpp"
+#include "builder/ground_truth.hpp"
 #include "builder/second_layer_caps.hpp"
+#include "builder/second_layer_rule.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -470,6 +472,10 @@ void apply_exit_caps(TileIntervals& intervals, std::span<const float> caps, floa
     if (interval.upper > interval.lower && interval.lower < 1.0f)
       interval.upper = std::max(interval.lower, std::min(interval.upper, caps[i] - exit_margin));
   }
+}
+
+double entry_tolerance_depth(const LightFrame& frame, const WorldBounds& bounds) {
+  return frame.depth_from_world(ground_truth_offset(bounds)) + second_layer::kSameSurface;
 }
 
 void apply_entry_rule(TileIntervals& intervals) {

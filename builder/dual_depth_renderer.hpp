@@ -112,6 +112,9 @@ class DualDepthRenderer {
 
 // upper = max(lower, min(upper, cap - margin)) for every hit texel with an exit (caps per texel, row-major).
 void apply_exit_caps(TileIntervals& intervals, std::span<const float> caps, float exit_margin);
+// DualDepthOptions::entry_tolerance for a map `frame` of a scene with `bounds`: the ground truth's
+// ray offset (builder/ground_truth.hpp) in normalised depth, plus the same-surface tolerance.
+double entry_tolerance_depth(const LightFrame& frame, const WorldBounds& bounds);
 // lower = min(lower, entry_lower) per texel, then entry_lower is emptied (nothing to do when empty).
 // After it, lower is no longer the first hit: raw and the other first-hit methods are encoded from
 // the intervals before, the interval methods (MH, MMH, DAG-MH) from a copy after.

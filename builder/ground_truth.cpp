@@ -7,9 +7,9 @@
 
 namespace shadowtiles {
 
-double ground_truth_offset(const Scene& scene) {
+double ground_truth_offset(const WorldBounds& bounds) {
   double diagonal = 0;
-  for (int i = 0; i < 3; ++i) diagonal += std::pow(scene.bounds.max[i] - scene.bounds.min[i], 2);
+  for (int i = 0; i < 3; ++i) diagonal += std::pow(bounds.max[i] - bounds.min[i], 2);
   return kGroundTruthOffsetPerDiagonal * std::sqrt(diagonal);
 }
 
@@ -19,7 +19,7 @@ GroundTruth::GroundTruth(const EmbreeDevice& device, const Scene& scene, const V
   double length = std::sqrt(light_direction[0] * light_direction[0] + light_direction[1] * light_direction[1] +
                             light_direction[2] * light_direction[2]);
   for (int i = 0; i < 3; ++i) to_sun_[i] = -light_direction[i] / length;
-  epsilon_ = ground_truth_offset(scene);
+  epsilon_ = ground_truth_offset(scene.bounds);
 
   commit_world_triangles(device, scene_, scene, centre_);
 }

@@ -12,8 +12,8 @@ namespace shadowtiles {
 
 // How far toward the sun an occlusion ray starts, per unit of the scene's bounding-box diagonal.
 inline constexpr double kGroundTruthOffsetPerDiagonal = 1e-5;
-// That offset for `scene` in world units.
-double ground_truth_offset(const Scene& scene);
+// That offset for a scene with these bounds, in world units.
+double ground_truth_offset(const WorldBounds& bounds);
 
 class GroundTruth {
  public:

@@ -6,6 +6,7 @@
 
 #include "builder/cpvs_encoder.hpp"
 #include "builder/dagmh_encoder.hpp"
+#include "builder/dual_depth_renderer.hpp"
 #include "builder/mh_encoder.hpp"
 #include "builder/mmh_merger.hpp"
 #include "builder/sst_encoder.hpp"
@@ -50,7 +51,7 @@ Result<EncodedBytes> encode_dagmh_method(TileEncodeInput& input) {
 }
 
 Result<EncodedBytes> encode_cpvs_method(TileEncodeInput& input) {
-  auto bytes = encode_cpvs_tile(input.intervals(), input.options().map_resolution);
+  auto bytes = encode_cpvs_tile(input.interval_method_intervals(), input.options().map_resolution);
   if (!bytes) return bytes.error();
   return EncodedBytes{std::move(*bytes), 0};
 }
@@ -109,11 +110,20 @@ EncoderTable& table() {
 
 }  // namespace
 
+const TileIntervals& TileEncodeInput::interval_method_intervals() {
+  if (intervals_.entry_lower.empty()) return intervals_;
+  if (!entry_applied_) {
+    entry_applied_ = intervals_;
+    apply_entry_rule(*entry_applied_);
+  }
+  return *entry_applied_;
+}
+
 Result<const MhHierarchy*> TileEncodeInput::mh() {
   if (!mh_) {
     MhBuildOptions build_options;
     build_options.construction = options_.construction;
-    auto built = build_mh(intervals_, build_options);
+    auto built = build_mh(interval_method_intervals(), build_options);
     if (!built) return built.error();
     mh_ = std::move(*built);
   }

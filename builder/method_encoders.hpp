@@ -29,7 +29,11 @@ class TileEncodeInput {
  public:
   TileEncodeInput(const TileIntervals& intervals, const TileEncodeOptions& options)
       : intervals_(intervals), options_(options) {}
+  // The rendered intervals: lower is the first hit (raw and SST store it).
   const TileIntervals& intervals() const { return intervals_; }
+  // The intervals the interval methods (MH family, CPVS) encode: with the entry rule's bounds applied
+  // when the renderer made them (a copy, made once), else intervals().
+  const TileIntervals& interval_method_intervals();
   const TileEncodeOptions& options() const { return options_; }
   // Errors: those of build_mh.
   Result<const MhHierarchy*> mh();
@@ -38,6 +42,7 @@ class TileEncodeInput {
  private:
   const TileIntervals& intervals_;
   const TileEncodeOptions& options_;
+  std::optional<TileIntervals> entry_applied_;
   std::optional<MhHierarchy> mh_;
 };
 

@@ -10,6 +10,7 @@
 #include "builder/light_space_scene.hpp"
 #include "builder/nearly_closed_meshes.hpp"
 #include "builder/reference_caps.hpp"
+#include "builder/reference_entry_bounds.hpp"
 #include "builder/second_layer_rule.hpp"
 #include "codec/cpvs_format.hpp"
 
@@ -102,6 +103,8 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
   // reference: a value may sit a float step or two above the reference's bound (~1e-7 of the depth
   // range, far inside the exit margin less the bias that receivers rely on).
   const unsigned cap_ulps = meta.exit_caps ? kCapUlps : 0;
+  const double entry_slack = map.frame().depth_from_world(meta.entry_slack);
+  const double entry_tolerance = entry_tolerance_depth(map.frame(), meta.scene_bounds);
 
   std::vector<TileCoord> tiles;
   for (uint64_t i = 0; i < map.layout().tile_count(); ++i) tiles.push_back(TileLayout::from_morton_index(i));
@@ -135,8 +138,18 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
       if (meta.exit_caps)
         apply_reference_caps(light_scene, tiles[i], meta.receivers, coplanar_epsilon, options.exit_margin, *intervals,
                              &cap_stats);
+      // With the entry rule, the interval methods' values may lie down to the reference's bound
+      // (builder/reference_entry_bounds.hpp); raw and SST still hold the first hit.
+      std::optional<TileIntervals> entry_applied;
+      if (entry_slack > 0) {
+        entry_applied = *intervals;
+        entry_applied->entry_lower =
+            reference_entry_bounds(light_scene, tiles[i], *intervals, entry_slack, entry_tolerance);
+        apply_entry_rule(*entry_applied);
+      }
       std::map<store::Method, MethodVerification> local;
       for (store::Method m : methods) {
+        const TileIntervals& expected = entry_applied && meta.min_query_bias(m) > 0 ? *entry_applied : *intervals;
         auto tile = map.tile(m, tiles[i]);
         if (!tile) {
           std::lock_guard lock(mutex);
@@ -144,9 +157,9 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
           return;
         }
         if (store::method_properties(m).stores_visibility)  // answers, not values
-          check_cpvs_tile(*intervals, tile->get(), tiles[i], cpvs_steps, local[m]);
+          check_cpvs_tile(expected, tile->get(), tiles[i], cpvs_steps, local[m]);
         else
-          check_tile(*intervals, tile->get(), tiles[i], cap_ulps, local[m]);
+          check_tile(expected, tile->get(), tiles[i], cap_ulps, local[m]);
       }
       std::lock_guard lock(mutex);
       for (auto& [m, v] : local) {

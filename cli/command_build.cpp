@@ -25,7 +25,7 @@ struct BuildFlags {
   uint32_t tile = 2048;
   unsigned threads = 2;
   std::vector<std::string> heightfields;
-  double bias_texels = 2.0, exit_margin_texels = 4.0;
+  double bias_texels = 2.0, exit_margin_texels = 4.0, entry_slack_texels = 0.0;
   bool overwrite = false, json = false, exit_caps = true, tile_costs = false, nearly_closed = true;
   double nearly_closed_tolerance = 0.1;
   uint64_t kill_after = 0;
@@ -64,6 +64,7 @@ int run(const BuildFlags& flags) {
   }
   config.bias_texels = flags.bias_texels;
   config.exit_margin_texels = flags.exit_margin_texels;
+  config.entry_slack_texels = flags.entry_slack_texels;
   config.overwrite = flags.overwrite;
   config.cap_exits_at_receiver_surfaces = flags.exit_caps;
   config.close_nearly_closed = flags.nearly_closed;
@@ -145,6 +146,11 @@ void add_build_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--bias-texels", flags->bias_texels, "Default query bias in texel widths")->capture_default_str();
   cmd->add_option("--exit-margin-texels", flags->exit_margin_texels,
                   "Closed-mesh exits pulled back by this many texel widths (>= bias)")->capture_default_str();
+  cmd->add_option("--entry-slack-texels", flags->entry_slack_texels,
+                  "surfaces only: the entry rule (docs/receiver-contracts.md): MH, MMH, DAG-MH and CPVS values may "
+                  "lie this many texel widths of depth above the first hit where a triangle covers the texel; "
+                  "queries of those methods then need a bias of at least this (<= bias; 0: off)")
+      ->capture_default_str();
   cmd->add_option("--mh-construction", flags->construction, "MH family: bottom-up or top-down (SBE16a Alg. 1)")
       ->capture_default_str();
   cmd->add_option("--receivers", flags->receivers,

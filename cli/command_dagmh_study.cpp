@@ -26,7 +26,6 @@
 #include "builder/dagmh_sharing_study.hpp"
 #include "builder/dual_depth_renderer.hpp"
 #include "builder/embree_device.hpp"
-#include "builder/ground_truth.hpp"
 #include "builder/light_space_scene.hpp"
 #include "builder/mh_builder.hpp"
 #include "builder/mh_encoder.hpp"
@@ -149,9 +148,7 @@ Result<ResolutionResult> study_resolution(const StudyFlags& flags, const Scene& 
       second_layer::coplanar_epsilon(frame->depth_from_world(build_defaults.bias_texels * frame->texel_size())));
   if (depth_options.receivers == ReceiverContract::surfaces && flags.entry_slack_texels > 0) {
     depth_options.entry_slack = float(frame->depth_from_world(flags.entry_slack_texels * frame->texel_size()));
-    // A receiver the ground truth lights may lie its ray's offset behind the visible surface.
-    depth_options.entry_tolerance =
-        float(frame->depth_from_world(ground_truth_offset(scene)) + second_layer::kSameSurface);
+    depth_options.entry_tolerance = float(entry_tolerance_depth(*frame, scene.bounds));
   }
   DualDepthRenderer renderer(device, light_scene, depth_options);
 

@@ -75,6 +75,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   const double bias_world = options.bias.value_or(meta_.default_bias);
   if (!std::isfinite(bias_world) || bias_world < 0)
     return make_error(ErrorCode::invalid_input, "bias must be finite and >= 0");
+  if (Status s = check_bias(method, bias_world); !s) return s;
   const double bias_depth = frame_.depth_from_world(bias_world);
   auto max_level_or = tile_max_level(options.level);
   if (!max_level_or) return max_level_or.error();

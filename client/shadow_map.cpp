@@ -109,6 +109,17 @@ uint64_t ShadowMap::next_id() {
   return next.fetch_add(1, std::memory_order_relaxed);
 }
 
+Status ShadowMap::check_bias(store::Method method, double bias_world) const {
+  // Relative slack for the rounding of two equal products (bias and slack in texel widths).
+  const double floor = meta_.min_query_bias(method);
+  if (floor > 0 && bias_world < floor * (1 - 1e-9))
+    return make_error(ErrorCode::invalid_input,
+                      "bias " + std::to_string(bias_world) + " is below " + std::to_string(floor) + ", the least bias " +
+                          store::method_name(method) +
+                          " answers for in this store (built with an entry slack: docs/receiver-contracts.md)");
+  return {};
+}
+
 Status ShadowMap::check_method(store::Method method) const {
   if (method_present_[uint8_t(method)]) return {};
   return make_error(ErrorCode::unsupported,
@@ -364,6 +375,7 @@ Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, uns
                       "pcf kernel must be odd and in [1, " + std::to_string(kMaxPcfKernel) + "]");
   if (Status s = check_method(method); !s) return s.error();
   const double bias_world = bias.value_or(meta_.default_bias);
+  if (Status s = check_bias(method, bias_world); !s) return s.error();
   auto located = locate(world, bias_world, level);
   if (!located) return located.error();
   auto [answer, max_level] = *located;
@@ -395,6 +407,7 @@ Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, s
                                       std::optional<unsigned> level) const {
   if (Status s = check_method(method); !s) return s.error();
   const double bias_world = bias.value_or(meta_.default_bias);
+  if (Status s = check_bias(method, bias_world); !s) return s.error();
   auto located = locate(world, bias_world, level);
   if (!located) return located.error();
   auto [answer, max_level] = *located;

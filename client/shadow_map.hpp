@@ -150,6 +150,8 @@ class ShadowMap {
   static uint64_t next_id();
 
   Status check_method(store::Method method) const;
+  // Refuses a bias below what `method`'s values answer for (StoreMeta::min_query_bias).
+  Status check_bias(store::Method method, double bias_world) const;
   // Validates a query and maps the point to light space; the answer is flagged outside_map (lit)
   // when it falls off the map. Also returns the max level inside a tile tree for `level`.
   Result<std::pair<ShadowAnswer, unsigned>> locate(const Vec3& world, double bias_world,

@@ -55,6 +55,13 @@ Result<LightFrame> StoreMeta::light_frame() const {
 
 Result<TileLayout> StoreMeta::layout() const { return TileLayout::make(resolution, tile_size); }
 
+double StoreMeta::min_query_bias(store::Method method) const {
+  using store::Method;
+  const bool from_entry_intervals =
+      method == Method::mh || method == Method::mmh || method == Method::dagmh || method == Method::cpvs;
+  return from_entry_intervals ? entry_slack : 0.0;
+}
+
 bool StoreMeta::has_method(store::Method method) const {
   return std::find(methods.begin(), methods.end(), method) != methods.end();
 }
@@ -80,6 +87,7 @@ nlohmann::json StoreMeta::to_json() const {
       {"exit_caps", exit_caps},
       {"build_stats", build_stats},
   };
+  if (entry_slack > 0) json["entry_slack"] = entry_slack;
   if (nearly_closed)
     json["nearly_closed"] = {{"tolerance", nearly_closed_tolerance},
                              {"max_ambiguous_area", nearly_closed_max_ambiguous_area},
@@ -210,6 +218,13 @@ Result<StoreMeta> StoreMeta::from_json(const nlohmann::json& json) {
     auto caps = field<bool>(json, "exit_caps");
     if (!caps) return caps.error();
     meta.exit_caps = *caps;
+  }
+  if (json.contains("entry_slack")) {
+    auto slack = field<double>(json, "entry_slack");
+    if (!slack) return slack.error();
+    if (!std::isfinite(*slack) || *slack < 0 || meta.receivers != ReceiverContract::surfaces)
+      return make_error(ErrorCode::corrupt_data, "meta: entry_slack must be finite, >= 0 and under surfaces");
+    meta.entry_slack = *slack;
   }
   if (json.contains("nearly_closed")) {
     const nlohmann::json& closing = json["nearly_closed"];

@@ -65,6 +65,10 @@ struct StoreMeta {
   ReceiverContract receivers = ReceiverContract::anywhere;
   // Exits capped by the receiver surfaces inside each texel (absent in older stores: false).
   bool exit_caps = false;
+  // `surfaces`, the entry rule (docs/receiver-contracts.md): the smallest query bias (world units)
+  // the interval methods' values answer for; queries with a smaller bias are refused for them.
+  // Absent in older stores and when off: 0.
+  double entry_slack = 0;
   // Nearly closed meshes accepted as solids (`anywhere` only; docs/receiver-contracts.md): the winding-number
   // test's parameters, which verify reloads the scene with. Absent in
   // older stores and when off: false.
@@ -84,6 +88,9 @@ struct StoreMeta {
   Result<LightFrame> light_frame() const;
   Result<TileLayout> layout() const;
   bool has_method(store::Method method) const;
+  // The smallest query bias (world units) `method` answers for: entry_slack for the methods encoded
+  // from the entry rule's intervals (MH, MMH, DAG-MH, CPVS), else 0.
+  double min_query_bias(store::Method method) const;
 
   nlohmann::json to_json() const;
   static Result<StoreMeta> from_json(const nlohmann::json& json);

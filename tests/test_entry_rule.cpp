@@ -79,7 +79,7 @@ Rendered render(const Scene& scene) {
   options.receivers = ReceiverContract::surfaces;
   options.coplanar_epsilon = float(second_layer::coplanar_epsilon(slack));
   options.entry_slack = float(slack);
-  options.entry_tolerance = float(frame->depth_from_world(ground_truth_offset(scene)) + second_layer::kSameSurface);
+  options.entry_tolerance = float(entry_tolerance_depth(*frame, scene.bounds));
   DualDepthRenderer renderer(*device, light_scene, options);
   auto intervals = renderer.render({0, 0});
   EXPECT_TRUE(intervals.ok());
@@ -195,8 +195,7 @@ RealScene real_scene() {
   options.receivers = ReceiverContract::surfaces;
   options.coplanar_epsilon = float(second_layer::coplanar_epsilon(r.bias));
   options.entry_slack = float(r.bias);
-  options.entry_tolerance =
-      float(r.frame->depth_from_world(ground_truth_offset(r.scene)) + second_layer::kSameSurface);
+  options.entry_tolerance = float(entry_tolerance_depth(*r.frame, r.scene.bounds));
   DualDepthRenderer renderer(*device, *r.light_scene, options);
   auto rendered = renderer.render({0, 0});
   auto centre = renderer.render_centre({0, 0});

@@ -37,6 +37,48 @@ TEST(ReceiverContracts, BothContractsAreLosslessOnOpenScenes) {
   }
 }
 
+// The entry rule (--entry-slack-texels, docs/receiver-contracts.md): verify's brute-force reference
+// accepts every value; raw still stores the first hit (same bytes); DAG-MH shrinks; the meta records
+// the slack; queries of the interval methods refuse a smaller bias, raw's accept it; `anywhere`
+// refuses the flag.
+TEST(ReceiverContracts, EntryRuleBuildsVerifyKeepRawAndRefuseSmallerBiases) {
+  TempDir dir;
+  auto without = build_and_verify(kHaus, "surfaces", 512, dir.path() / "s");
+  auto with = build_and_verify(kHaus, "surfaces", 512, dir.path() / "e", "--entry-slack-texels 2");
+  EXPECT_EQ(with["bytes_by_method"]["raw"], without["bytes_by_method"]["raw"]);
+  EXPECT_LT(with["bytes_by_method"]["dagmh"].get<uint64_t>(), without["bytes_by_method"]["dagmh"].get<uint64_t>() * 9 / 10);
+  std::printf("fzk_haus 512^2 surfaces dagmh bytes: %llu, with the entry rule %llu\n",
+              (unsigned long long)without["bytes_by_method"]["dagmh"].get<uint64_t>(),
+              (unsigned long long)with["bytes_by_method"]["dagmh"].get<uint64_t>());
+
+  auto map = ShadowMap::open(dir.path() / "e");
+  ASSERT_TRUE(map.ok()) << map.error().message;
+  const StoreMeta& meta = (*map)->meta();
+  EXPECT_NEAR(meta.entry_slack, meta.default_bias, 1e-12);
+  const Vec3 point = (*map)->meta().scene_bounds.min;
+  EXPECT_TRUE((*map)->query(point, store::Method::dagmh).ok());  // the default bias
+  auto refused = (*map)->query(point, store::Method::dagmh, meta.default_bias / 2);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::invalid_input);
+  EXPECT_NE(refused.error().message.find("entry slack"), std::string::npos) << refused.error().message;
+  EXPECT_FALSE((*map)->query_pcf(point, store::Method::mh, 3, meta.default_bias / 2).ok());
+  EXPECT_TRUE((*map)->query(point, store::Method::raw, meta.default_bias / 2).ok());
+  ShadowMap::BatchOptions options;
+  options.bias = meta.default_bias / 2;
+  ShadowMap::BatchAnswers answers;
+  const std::vector<Vec3> points{point};
+  EXPECT_FALSE((*map)->query_batch(points, store::Method::dagmh, options, answers).ok());
+  EXPECT_TRUE((*map)->query_batch(points, store::Method::raw, options, answers).ok());
+
+  std::string output;
+  EXPECT_EQ(run_command(cli_path().string() + " build " + shared_scene(kHaus.file).string() +
+                            " --up y --resolution 256 --tile 256 --method dagmh --receivers anywhere "
+                            "--entry-slack-texels 2 --out " + (dir.path() / "a").string() + " 2>&1",
+                        &output),
+            2)
+      << output;
+}
+
 TEST(ReceiverContracts, TexelCentreIntervalsVerifyWithoutCaps) {
   TempDir dir;
   build_and_verify(kHaus, "surfaces", 256, dir.path() / "s", "--no-exit-caps");
