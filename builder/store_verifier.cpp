@@ -113,6 +113,7 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
   VerifyReport report;
   report.receivers = meta.receivers;
   report.exit_caps = meta.exit_caps;
+  report.entry_slack = meta.entry_slack;
   for (store::Method m : methods) report.methods[m];
   std::mutex mutex;
   std::optional<Error> error;

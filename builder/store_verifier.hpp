@@ -37,6 +37,7 @@ struct VerifyReport {
   uint64_t tiles_checked = 0;
   ReceiverContract receivers = ReceiverContract::anywhere;  // the store's contract, as verified
   bool exit_caps = false;                                    // intervals capped by the reference
+  double entry_slack = 0;  // world units; > 0: the interval methods checked against the entry rule's reference
   uint64_t reference_cap_texels = 0;                         // texels whose cap the reference computed
   bool ok() const {
     for (const auto& [method, v] : methods)

@@ -127,8 +127,8 @@ int run(const InspectFlags& flags) {
   std::printf("store %s: %u^2 texels, tiles of %u^2, %s, scene %s (%llu triangles)\n", flags.store.c_str(),
               meta->resolution, meta->tile_size, meta->complete ? "complete" : "INCOMPLETE",
               meta->scene_path.c_str(), (unsigned long long)meta->scene_triangles);
-  std::printf("receivers %s, exit caps %s (docs/receiver-contracts.md)\n", receiver_contract_name(meta->receivers),
-              meta->exit_caps ? "on" : "off");
+  std::printf("receivers %s, exit caps %s, entry slack %g (docs/receiver-contracts.md)\n",
+              receiver_contract_name(meta->receivers), meta->exit_caps ? "on" : "off", meta->entry_slack);
   std::printf("%-8s %8s %14s %14s %10s %10s\n", "method", "tiles", "bytes", "payload", "bits/texel", "vs float32");
   for (auto& [name, t] : totals)
     std::printf("%-8s %8llu %14llu %14llu %10.4f %10.4f\n", name.c_str(), (unsigned long long)t.tiles,

@@ -41,9 +41,10 @@ int run(const VerifyFlags& flags) {
   nlohmann::json out = nlohmann::json::object();
   out["receivers"] = receiver_contract_name(report->receivers);
   out["exit_caps"] = report->exit_caps;
+  out["entry_slack"] = report->entry_slack;
   if (!flags.json)
-    std::printf("receivers %s, exit caps %s (brute-force reference over %llu texels)\n",
-                receiver_contract_name(report->receivers), report->exit_caps ? "on" : "off",
+    std::printf("receivers %s, exit caps %s, entry slack %g (brute-force reference over %llu texels)\n",
+                receiver_contract_name(report->receivers), report->exit_caps ? "on" : "off", report->entry_slack,
                 (unsigned long long)report->reference_cap_texels);
   for (const auto& [method, v] : report->methods) {
     out[store::method_name(method)] = {{"tiles", v.tiles}, {"texels", v.texels}, {"outside", v.outside},

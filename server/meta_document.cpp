@@ -63,6 +63,8 @@ nlohmann::json meta_document(const ShadowMap& map) {
         // Which query points the answers are exact for (docs/receiver-contracts.md).
         {"receivers", receiver_contract_name(meta.receivers)},
         {"exit_caps", meta.exit_caps},
+        // The least query bias the MH family and CPVS answer for (entry rule; 0: off).
+        {"entry_slack", meta.entry_slack},
         {"build_stats", meta.build_stats}}},
   };
 }

@@ -55,6 +55,9 @@ TEST(ReceiverContracts, EntryRuleBuildsVerifyKeepRawAndRefuseSmallerBiases) {
   ASSERT_TRUE(map.ok()) << map.error().message;
   const StoreMeta& meta = (*map)->meta();
   EXPECT_NEAR(meta.entry_slack, meta.default_bias, 1e-12);
+  std::string verified;
+  ASSERT_EQ(run_stdout(cli_path().string() + " verify " + (dir.path() / "e").string() + " --json", &verified), 0);
+  EXPECT_NEAR(nlohmann::json::parse(verified)["entry_slack"].get<double>(), meta.entry_slack, 1e-12);
   const Vec3 point = (*map)->meta().scene_bounds.min;
   EXPECT_TRUE((*map)->query(point, store::Method::dagmh).ok());  // the default bias
   auto refused = (*map)->query(point, store::Method::dagmh, meta.default_bias / 2);
@@ -146,6 +149,7 @@ TEST(ReceiverContracts, ServerAnswersAndTheHttpClientNameTheContract) {
   auto meta_json = nlohmann::json::parse(meta->body);
   EXPECT_EQ(meta_json["shadow"]["receivers"], "surfaces");
   EXPECT_EQ(meta_json["shadow"]["exit_caps"], true);
+  EXPECT_EQ(meta_json["shadow"]["entry_slack"], 0.0);  // built without the entry rule
   auto point = client.Get("/v1/shadow?x=5&y=2&z=-5");
   ASSERT_TRUE(point && point->status == 200) << (point ? point->body : "no answer");
   EXPECT_EQ(nlohmann::json::parse(point->body)["receivers"], "surfaces");
