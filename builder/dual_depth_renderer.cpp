@@ -105,13 +105,51 @@ struct DepthPlane {
   }
 };
 
+// The triangle across one edge of another, in the same set: its primitive id and the index of the
+// shared edge in it (edge k runs from vertex k to vertex k + 1); prim < 0 when there is none.
+struct EdgeNeighbour {
+  int32_t prim = -1;
+  int32_t edge = -1;
+};
+using EdgeNeighbours = std::array<EdgeNeighbour, 3>;
+
 struct TileGeometry {
   std::vector<float> closed_vertices, open_vertices;    // xyz per vertex, 3 vertices per triangle
   ClosedGeometryData closed;                            // closed meshes and heightfields
   ClosedGeometryData open;                              // open meshes (filter data under `surfaces`)
   std::vector<DepthPlane> closed_planes, open_planes;   // by Embree primitive id
+  std::vector<EdgeNeighbours> closed_neighbours, open_neighbours;  // the entry rule's only
   size_t open_count = 0;
 };
+
+// Links triangles that share an edge (the same two welded vertex ids, so the same float endpoints
+// in the tile's footprint). `ids` holds three vertex ids per triangle; `skip` marks triangles that
+// are no surface (patches). An edge shared by more than two triangles links none of them.
+std::vector<EdgeNeighbours> link_edge_neighbours(const std::vector<uint32_t>& ids, const std::vector<uint8_t>& skip) {
+  const size_t count = ids.size() / 3;
+  std::vector<EdgeNeighbours> neighbours(count);
+  std::vector<std::pair<uint64_t, uint32_t>> edges;  // (edge key, triangle * 3 + edge)
+  edges.reserve(ids.size());
+  for (size_t t = 0; t < count; ++t) {
+    if (skip[t]) continue;
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint64_t a = ids[t * 3 + k], b = ids[t * 3 + (k + 1) % 3];
+      edges.push_back({std::min(a, b) << 32 | std::max(a, b), uint32_t(t * 3 + k)});
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  for (size_t i = 0; i < edges.size();) {
+    size_t end = i + 1;
+    while (end < edges.size() && edges[end].first == edges[i].first) ++end;
+    if (end - i == 2) {
+      const uint32_t p = edges[i].second, q = edges[i + 1].second;
+      neighbours[p / 3][p % 3] = {int32_t(q / 3), int32_t(q % 3)};
+      neighbours[q / 3][q % 3] = {int32_t(p / 3), int32_t(p % 3)};
+    }
+    i = end;
+  }
+  return neighbours;
+}
 
 // Front-facing toward the light: counter-clockwise seen from the light, i.e. the normal's depth
 // component is negative (the light travels +depth in a right-handed frame).
@@ -120,8 +158,9 @@ bool faces_light(const LightSpacePoint& a, const LightSpacePoint& b, const Light
   return nz <= 0.0;  // edge-on counts as front: the counter then never closes early (conservative)
 }
 
-TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile) {
+TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile, bool with_neighbours) {
   TileGeometry geometry;
+  std::vector<uint32_t> closed_ids, open_ids;  // welded vertex ids, for the edge neighbours
   geometry.open.open = true;
   const double u0 = double(tile.x) * scene.layout().tile_size();
   const double v0 = double(tile.y) * scene.layout().tile_size();
@@ -141,6 +180,7 @@ TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile) 
     emit(vertices, a);
     emit(vertices, b);
     emit(vertices, c);
+    if (with_neighbours) (closed ? closed_ids : open_ids).insert((closed ? closed_ids : open_ids).end(), {a_id, b_id, c_id});
     set.front.push_back(faces_light(a, b, c) ? 1 : 0);
     set.heightfield.push_back(heightfield ? 1 : 0);
     set.slack.push_back(exit_slack(a, b, c));
@@ -159,6 +199,10 @@ TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile) 
   for (uint32_t t : scene.patches_of(tile)) {
     const auto& tri = world.patch_triangles[t];
     add(true, tri[0], tri[1], tri[2], false, true);
+  }
+  if (with_neighbours) {
+    geometry.closed_neighbours = link_edge_neighbours(closed_ids, geometry.closed.patch);
+    geometry.open_neighbours = link_edge_neighbours(open_ids, geometry.open.patch);
   }
   return geometry;
 }
@@ -282,41 +326,72 @@ DepthInterval resolve_surfaces_interval(std::vector<ClosedHit>& hits, const Dual
   return interval;
 }
 
+// A triangle's footprint in tile-local texels (its float vertices, as Embree saw them), for the
+// entry rule's cover tests: side(k, p) > 0 when p is strictly inside edge k (vertex k to k + 1).
+struct Footprint {
+  double u[3], v[3], area;
+  explicit Footprint(const float* x)
+      : u{x[0], x[3], x[6]}, v{x[1], x[4], x[7]},
+        area((u[1] - u[0]) * (v[2] - v[0]) - (v[1] - v[0]) * (u[2] - u[0])) {}
+  double side(int k, double pu, double pv) const {
+    const int j = (k + 1) % 3;
+    return ((u[j] - u[k]) * (pv - v[k]) - (v[j] - v[k]) * (pu - u[k])) * area;
+  }
+};
+
 // The entry rule (DualDepthOptions::entry_slack). `first` is the centre ray's first hit, (cu, cv)
-// the texel centre in tile-local texels, (global_u, global_v) in the map's. When the texel's square lies inside the first hit
-// triangle's footprint, that triangle covers every point of the square, so the visible depth there
-// is at most the triangle's depth, whose largest value over the square is at a corner: a lit
-// receiver is no deeper than that plus `tolerance` (the ground truth's ray offset), and with a
-// query bias of at least `slack` any value from that depth less `slack` lights it. Else (an edge crosses the
-// square, or the triangle is edge-on) lower stays the first hit.
+// the texel centre in tile-local texels, (global_u, global_v) in the map's. When the texel's square
+// lies inside the footprint of the first-hit triangle, or of it and the triangle across the one edge
+// that crosses the square, those triangles cover every point of the square, so the visible depth
+// there is at most theirs, whose largest value over the square is at a corner of it: a lit receiver
+// is no deeper than that plus `tolerance` (the ground truth's ray offset), and with a query bias of
+// at least `slack` any value from that depth less `slack` lights it. Else (a vertex, two edges or a
+// silhouette edge in the square, or an edge-on triangle) lower stays the first hit.
 constexpr double kEntrySquareHalf = 0.51;
 float entry_lower(const TileGeometry& geometry, const ClosedHit& first, double cu, double cv, double global_u,
                   double global_v, float lower, float slack, float tolerance) {
-  const DepthPlane& plane = (first.open ? geometry.open_planes : geometry.closed_planes)[first.prim];
+  const auto& planes = first.open ? geometry.open_planes : geometry.closed_planes;
+  const auto& vertices = first.open ? geometry.open_vertices : geometry.closed_vertices;
+  const DepthPlane& plane = planes[first.prim];
   if (plane.edge_on) return lower;
-  const float* x = &(first.open ? geometry.open_vertices : geometry.closed_vertices)[size_t(first.prim) * 9];
-  // Edge functions of the footprint (tile-local floats, as Embree saw them) at the square's corners.
-  const double au = x[0], av = x[1], bu = x[3], bv = x[4], cu_ = x[6], cv_ = x[7];
-  const double area = (bu - au) * (cv_ - av) - (bv - av) * (cu_ - au);
-  if (area == 0) return lower;
-  auto inside = [&](double pu, double pv) {
-    const double e0 = ((bu - au) * (pv - av) - (bv - av) * (pu - au)) * area;
-    const double e1 = ((cu_ - bu) * (pv - bv) - (cv_ - bv) * (pu - bu)) * area;
-    const double e2 = ((au - cu_) * (pv - cv_) - (av - cv_) * (pu - cu_)) * area;
-    return e0 > 0 && e1 > 0 && e2 > 0;
-  };
+  const Footprint triangle(&vertices[size_t(first.prim) * 9]);
+  if (triangle.area == 0) return lower;
   // The square grown by a hundredth of a texel: the footprint's float vertices are rounded.
-  for (double du : {-kEntrySquareHalf, kEntrySquareHalf})
-    for (double dv : {-kEntrySquareHalf, kEntrySquareHalf})
-      if (!inside(cu + du, cv + dv)) return lower;
-  // Deepest corner: the plane's depth at the centre (in double, not the stored float) plus half a
-  // texel of slope along each axis.
-  const double centre = plane.depth + plane.du * (global_u - plane.u) + plane.dv * (global_v - plane.v);
-  const double deepest = centre + 0.5 * (std::fabs(plane.du) + std::fabs(plane.dv)) + double(tolerance);
-  const double entry = deepest - double(slack);
+  const double corner_u[4] = {cu - kEntrySquareHalf, cu + kEntrySquareHalf, cu - kEntrySquareHalf, cu + kEntrySquareHalf};
+  const double corner_v[4] = {cv - kEntrySquareHalf, cv - kEntrySquareHalf, cv + kEntrySquareHalf, cv + kEntrySquareHalf};
+  auto square_inside = [&](const Footprint& f, int k) {
+    for (int c = 0; c < 4; ++c)
+      if (!(f.side(k, corner_u[c], corner_v[c]) > 0)) return false;
+    return true;
+  };
+  int crossed = -1;  // the one edge of the triangle that crosses the square
+  for (int k = 0; k < 3; ++k) {
+    if (square_inside(triangle, k)) continue;
+    if (crossed >= 0) return lower;
+    crossed = k;
+  }
+  // Largest depth of a plane over the square: at the centre (in double, not the stored float) plus
+  // half a texel of slope along each axis.
+  auto deepest_of = [&](const DepthPlane& p) {
+    return p.depth + p.du * (global_u - p.u) + p.dv * (global_v - p.v) + 0.5 * (std::fabs(p.du) + std::fabs(p.dv));
+  };
+  double deepest = deepest_of(plane);
+  if (crossed >= 0) {
+    // The triangle across that edge covers the rest of the square when it lies on the edge's other
+    // side (not folded under: a silhouette) and its own two other edges keep the square inside.
+    const auto& neighbours = first.open ? geometry.open_neighbours : geometry.closed_neighbours;
+    const EdgeNeighbour across = neighbours[first.prim][crossed];
+    if (across.prim < 0 || planes[across.prim].edge_on) return lower;
+    const Footprint other(&vertices[size_t(across.prim) * 9]);
+    const int opposite = (across.edge + 2) % 3;
+    if (other.area == 0 || !(triangle.side(crossed, other.u[opposite], other.v[opposite]) < 0)) return lower;
+    if (!square_inside(other, (across.edge + 1) % 3) || !square_inside(other, opposite)) return lower;
+    deepest = std::max(deepest, deepest_of(planes[across.prim]));
+  }
+  const double entry = deepest + double(tolerance) - double(slack);
   if (entry >= double(lower)) return lower;
   // Rounded up to a float and one float step more: never below the exact bound, nor below verify's
-  // reference (builder/reference_entry_bounds.hpp), which evaluates the same plane another way.
+  // reference (builder/reference_entry_bounds.hpp), which evaluates the same planes another way.
   float bound = float(entry);
   if (double(bound) < entry) bound = std::nextafter(bound, std::numeric_limits<float>::infinity());
   bound = std::nextafter(bound, std::numeric_limits<float>::infinity());
@@ -358,7 +433,7 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
   }
 
   auto bvh_start = Clock::now();
-  TileGeometry geometry = gather_tile_geometry(scene_, tile);
+  TileGeometry geometry = gather_tile_geometry(scene_, tile, entry_rule);
   EmbreeScene rtc_scene(rtcNewScene(device_.get()));
   rtcSetSceneFlags(rtc_scene.get(), RTC_SCENE_FLAG_ROBUST);
   unsigned closed_id = RTC_INVALID_GEOMETRY_ID;
