@@ -118,7 +118,9 @@ struct TileGeometry {
   ClosedGeometryData closed;                            // closed meshes and heightfields
   ClosedGeometryData open;                              // open meshes (filter data under `surfaces`)
   std::vector<DepthPlane> closed_planes, open_planes;   // by Embree primitive id
-  std::vector<EdgeNeighbours> closed_neighbours, open_neighbours;  // the entry rule's only
+  // The entry rule's only: the triangle across each edge, and each triangle's three welded vertex ids.
+  std::vector<EdgeNeighbours> closed_neighbours, open_neighbours;
+  std::vector<uint32_t> closed_ids, open_ids;
   size_t open_count = 0;
 };
 
@@ -160,7 +162,8 @@ bool faces_light(const LightSpacePoint& a, const LightSpacePoint& b, const Light
 
 TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile, bool with_neighbours) {
   TileGeometry geometry;
-  std::vector<uint32_t> closed_ids, open_ids;  // welded vertex ids, for the edge neighbours
+  std::vector<uint32_t>& closed_ids = geometry.closed_ids;
+  std::vector<uint32_t>& open_ids = geometry.open_ids;
   geometry.open.open = true;
   const double u0 = double(tile.x) * scene.layout().tile_size();
   const double v0 = double(tile.y) * scene.layout().tile_size();
@@ -326,67 +329,80 @@ DepthInterval resolve_surfaces_interval(std::vector<ClosedHit>& hits, const Dual
   return interval;
 }
 
-// A triangle's footprint in tile-local texels (its float vertices, as Embree saw them), for the
-// entry rule's cover tests: side(k, p) > 0 when p is strictly inside edge k (vertex k to k + 1).
-struct Footprint {
-  double u[3], v[3], area;
-  explicit Footprint(const float* x)
-      : u{x[0], x[3], x[6]}, v{x[1], x[4], x[7]},
-        area((u[1] - u[0]) * (v[2] - v[0]) - (v[1] - v[0]) * (u[2] - u[0])) {}
-  double side(int k, double pu, double pv) const {
-    const int j = (k + 1) % 3;
-    return ((u[j] - u[k]) * (pv - v[k]) - (v[j] - v[k]) * (pu - u[k])) * area;
-  }
-};
-
-// The entry rule (DualDepthOptions::entry_slack). `first` is the centre ray's first hit, (cu, cv)
-// the texel centre in tile-local texels, (global_u, global_v) in the map's. When the texel's square
-// lies inside the footprint of the first-hit triangle, or of it and the triangle across the one edge
-// that crosses the square, those triangles cover every point of the square, so the visible depth
-// there is at most theirs, whose largest value over the square is at a corner of it: a lit receiver
-// is no deeper than that plus `tolerance` (the ground truth's ray offset), and with a query bias of
-// at least `slack` any value from that depth less `slack` lights it. Else (a vertex, two edges or a
-// silhouette edge in the square, or an edge-on triangle) lower stays the first hit.
+// The entry rule (DualDepthOptions::entry_slack). `first_prim` is the centre ray's first-hit triangle
+// (in the open set when `open`), (cu, cv) the texel centre in tile-local texels, (global_u, global_v)
+// in the map's. The rule needs triangles whose footprints cover the texel's whole square S: then the
+// visible depth at every point of S is at most the depth of a triangle there, so a lit receiver is no
+// deeper than the largest of their depths over S plus `tolerance` (the ground truth's ray offset),
+// and with a query bias of at least `slack` any value from that depth less `slack` lights it. Else (S reaches a hole, a mesh's border, a
+// silhouette fold or an edge-on triangle) lower stays the first hit.
+//
+// The cover is grown from the first-hit triangle across every edge that meets S (the square grown by
+// a hundredth of a texel, for the footprints' float rounding) to the triangle on that edge's other
+// side. It holds S when every such edge has exactly one such triangle, lying on the other side (not
+// folded under), and the set stays small: the union's boundary then lies on edges that miss S (around
+// a vertex in S the triangles form a closed, unfolded fan), and S, connected and holding the centre,
+// lies inside it. docs/receiver-contracts.md, "The entry rule", has the argument.
 constexpr double kEntrySquareHalf = 0.51;
-float entry_lower(const TileGeometry& geometry, const ClosedHit& first, double cu, double cv, double global_u,
-                  double global_v, float lower, float slack, float tolerance) {
-  const auto& planes = first.open ? geometry.open_planes : geometry.closed_planes;
-  const auto& vertices = first.open ? geometry.open_vertices : geometry.closed_vertices;
-  const DepthPlane& plane = planes[first.prim];
-  if (plane.edge_on) return lower;
-  const Footprint triangle(&vertices[size_t(first.prim) * 9]);
-  if (triangle.area == 0) return lower;
-  // The square grown by a hundredth of a texel: the footprint's float vertices are rounded.
+constexpr int kMaxCoverTriangles = 24;  // more: lower stays the first hit (a bounded cost per texel)
+float entry_lower(const TileGeometry& geometry, const LightSpaceScene& scene, bool open, uint32_t first_prim,
+                  double cu, double cv, double global_u, double global_v, float lower, float slack, float tolerance) {
+  const auto& planes = open ? geometry.open_planes : geometry.closed_planes;
+  const auto& vertices = open ? geometry.open_vertices : geometry.closed_vertices;
+  const auto& neighbours = open ? geometry.open_neighbours : geometry.closed_neighbours;
+  const auto& ids = open ? geometry.open_ids : geometry.closed_ids;
   const double corner_u[4] = {cu - kEntrySquareHalf, cu + kEntrySquareHalf, cu - kEntrySquareHalf, cu + kEntrySquareHalf};
   const double corner_v[4] = {cv - kEntrySquareHalf, cv - kEntrySquareHalf, cv + kEntrySquareHalf, cv + kEntrySquareHalf};
-  auto square_inside = [&](const Footprint& f, int k) {
-    for (int c = 0; c < 4; ++c)
-      if (!(f.side(k, corner_u[c], corner_v[c]) > 0)) return false;
-    return true;
+  // Whether a footprint edge may meet the grown square: false only when its bounding box misses the
+  // square or the square lies strictly on one side of its line.
+  auto edge_meets_square = [&](const float* p, const float* q) {
+    if (std::max(p[0], q[0]) < corner_u[0] || std::min(p[0], q[0]) > corner_u[1] ||
+        std::max(p[1], q[1]) < corner_v[0] || std::min(p[1], q[1]) > corner_v[2])
+      return false;
+    int positive = 0, negative = 0;
+    for (int c = 0; c < 4; ++c) {
+      const double side = (double(q[0]) - p[0]) * (corner_v[c] - p[1]) - (double(q[1]) - p[1]) * (corner_u[c] - p[0]);
+      positive += side > 0;
+      negative += side < 0;
+    }
+    return positive != 4 && negative != 4;
   };
-  int crossed = -1;  // the one edge of the triangle that crosses the square
-  for (int k = 0; k < 3; ++k) {
-    if (square_inside(triangle, k)) continue;
-    if (crossed >= 0) return lower;
-    crossed = k;
+  // Side of point r of the line p -> q, from the scene's double light-space vertices.
+  auto side = [&](uint32_t p, uint32_t q, uint32_t r) {
+    const LightSpacePoint &a = scene.vertex(p), &b = scene.vertex(q), &c = scene.vertex(r);
+    return (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
+  };
+  std::array<int32_t, kMaxCoverTriangles> cover;
+  int count = 0;
+  cover[count++] = int32_t(first_prim);
+  for (int i = 0; i < count; ++i) {
+    const int32_t prim = cover[size_t(i)];
+    if (planes[size_t(prim)].edge_on) return lower;
+    const float* x = &vertices[size_t(prim) * 9];
+    for (int k = 0; k < 3; ++k) {
+      const int j = (k + 1) % 3;
+      if (!edge_meets_square(x + 3 * k, x + 3 * j)) continue;
+      const EdgeNeighbour across = neighbours[size_t(prim)][size_t(k)];
+      if (across.prim < 0 || planes[size_t(across.prim)].edge_on) return lower;
+      const uint32_t a = ids[size_t(prim) * 3 + k], b = ids[size_t(prim) * 3 + j];
+      const uint32_t mine = ids[size_t(prim) * 3 + (k + 2) % 3];
+      const uint32_t theirs = ids[size_t(across.prim) * 3 + (across.edge + 2) % 3];
+      const double my_side = side(a, b, mine), their_side = side(a, b, theirs);
+      if (!((my_side > 0 && their_side < 0) || (my_side < 0 && their_side > 0))) return lower;  // folded
+      if (std::find(cover.begin(), cover.begin() + count, across.prim) != cover.begin() + count) continue;
+      if (count == kMaxCoverTriangles) return lower;
+      cover[size_t(count++)] = across.prim;
+    }
   }
-  // Largest depth of a plane over the square: at the centre (in double, not the stored float) plus
-  // half a texel of slope along each axis.
-  auto deepest_of = [&](const DepthPlane& p) {
-    return p.depth + p.du * (global_u - p.u) + p.dv * (global_v - p.v) + 0.5 * (std::fabs(p.du) + std::fabs(p.dv));
-  };
-  double deepest = deepest_of(plane);
-  if (crossed >= 0) {
-    // The triangle across that edge covers the rest of the square when it lies on the edge's other
-    // side (not folded under: a silhouette) and its own two other edges keep the square inside.
-    const auto& neighbours = first.open ? geometry.open_neighbours : geometry.closed_neighbours;
-    const EdgeNeighbour across = neighbours[first.prim][crossed];
-    if (across.prim < 0 || planes[across.prim].edge_on) return lower;
-    const Footprint other(&vertices[size_t(across.prim) * 9]);
-    const int opposite = (across.edge + 2) % 3;
-    if (other.area == 0 || !(triangle.side(crossed, other.u[opposite], other.v[opposite]) < 0)) return lower;
-    if (!square_inside(other, (across.edge + 1) % 3) || !square_inside(other, opposite)) return lower;
-    deepest = std::max(deepest, deepest_of(planes[across.prim]));
+  // A triangle's largest depth over its part of the square is at most its plane's over the whole
+  // square (at the centre, in double, plus half a texel of slope along each axis) and at most its
+  // deepest vertex.
+  double deepest = -std::numeric_limits<double>::infinity();
+  for (int i = 0; i < count; ++i) {
+    const DepthPlane& p = planes[size_t(cover[size_t(i)])];
+    const double over_square =
+        p.depth + p.du * (global_u - p.u) + p.dv * (global_v - p.v) + 0.5 * (std::fabs(p.du) + std::fabs(p.dv));
+    deepest = std::max(deepest, std::min(over_square, p.highest));
   }
   const double entry = deepest + double(tolerance) - double(slack);
   if (entry >= double(lower)) return lower;
@@ -408,6 +424,7 @@ void DualDepthStats::add(const DualDepthStats& other) {
   bvh_seconds += other.bvh_seconds;
   ray_seconds += other.ray_seconds;
   cap_seconds += other.cap_seconds;
+  entry_seconds += other.entry_seconds;
 }
 
 DualDepthRenderer::DualDepthRenderer(const EmbreeDevice& device, const LightSpaceScene& scene,
@@ -452,6 +469,9 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
   local.bvh_seconds = seconds_since(bvh_start);
 
   auto ray_start = Clock::now();
+  // The entry rule's: each hit texel's first-hit triangle, its primitive id with the open set's flag.
+  constexpr uint32_t kOpenFlag = 1u << 31;
+  std::vector<uint32_t> first_hits(entry_rule ? size_t(size) * size : 0);
   std::array<std::vector<ClosedHit>, kPacket> lanes;
   CollectContext context;
   rtcInitIntersectContext(&context.base);
@@ -494,12 +514,7 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
           hit.t = (hit.open ? geometry.open_planes : geometry.closed_planes)[hit.prim].at(centre_u, centre_v, hit.t);
         DepthInterval interval = surfaces ? resolve_surfaces_interval(lanes[lane], options_)
                                           : resolve_interval(lanes[lane], open_t, options_);
-        if (entry_rule)
-          intervals.entry_lower[size_t(v) * size + u_start + lane] =
-              interval.lower < 1.0f ? entry_lower(geometry, lanes[lane].front(), double(u_start + lane) + 0.5,
-                                                  double(v) + 0.5, centre_u, centre_v, interval.lower,
-                                                  options_.entry_slack, options_.entry_tolerance)
-                                    : interval.lower;
+        if (entry_rule && interval.lower < 1.0f) first_hits[size_t(v) * size + u_start + lane] = lanes[lane].front().prim | (lanes[lane].front().open ? kOpenFlag : 0);
         intervals.at(u_start + lane, v) = interval;
         if (interval.lower < 1.0f) ++local.hits;
       }
@@ -507,6 +522,19 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
   }
   (void)closed_id;
   local.ray_seconds = seconds_since(ray_start);
+  if (entry_rule) {
+    const auto entry_start = Clock::now();
+    for (uint32_t v = 0; v < size; ++v)
+      for (uint32_t u = 0; u < size; ++u) {
+        const size_t i = size_t(v) * size + u;
+        const float lower = intervals.texels[i].lower;
+        if (lower < 1.0f)
+          intervals.entry_lower[i] = entry_lower(geometry, scene_, (first_hits[i] & kOpenFlag) != 0, first_hits[i] & ~kOpenFlag, u + 0.5, v + 0.5,
+                                                 double(tile_u0) + u + 0.5, double(tile_v0) + v + 0.5, lower,
+                                                 options_.entry_slack, options_.entry_tolerance);
+      }
+    local.entry_seconds = seconds_since(entry_start);
+  }
   local.rays = uint64_t(size) * size;
   if (stats) stats->add(local);
   return intervals;

@@ -48,6 +48,7 @@ struct DualDepthStats {
   double bvh_seconds = 0;
   double ray_seconds = 0;  // the ray casting alone (packets, counter walk)
   double cap_seconds = 0;  // the exit-cap pass (receiver_surface_caps / second_layer_caps), when on
+  double entry_seconds = 0;  // the entry rule's cover pass, when on (after the rays, not in ray_seconds)
 
   void add(const DualDepthStats& other);
 };

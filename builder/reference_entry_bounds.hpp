@@ -1,14 +1,14 @@
 // Brute-force reference of the `surfaces` entry rule (docs/receiver-contracts.md, "The entry rule"),
-// for `verify`: independent of the renderer's pass, which looks at the first hit's triangle and the
-// one across an edge crossing the square, through their tile-local float footprints. Here every
-// triangle of the tile whose footprint (double light-space vertices, closed) contains a texel's whole
-// square bounds the visible depth there by its own deepest corner, and so does every pair of
-// triangles on the two sides of a shared edge whose union contains it (each triangle's deepest point
-// over its own part of the square); the bound is min(first hit, the smallest such depth + tolerance -
-// slack), rounded up to a float. The renderer's covers are among these and its depths over the whole
-// square are no smaller, so the reference is at most the renderer's bound (up to rounding) and a
-// value the build stores is never below it.
-// Patches (nearly closed meshes' holes) are not surfaces and bound nothing; edge-on triangles neither.
+// for `verify`, independent of the renderer's pass (which grows a cover from the first hit's triangle
+// across shared edges, through tile-local float footprints, and bounds each triangle by its plane over
+// the whole square). Here, per texel: every triangle of the tile with area in the square (double
+// light-space vertices) is clipped to it and weighed by its deepest point over its part; the bound is
+// the smallest depth B such that the triangles no deeper than B cover the square (the square less
+// those triangles, piece by convex piece, leaves nothing but slivers of under 1e-9 texels squared),
+// then min(first hit, B + tolerance - slack), rounded up to a float. The renderer's cover is such a
+// set and its depths are no smaller, so the reference is at most the renderer's bound (up to rounding)
+// and a value the build stores is never below it. Patches (nearly closed meshes' holes) are not
+// surfaces and cover nothing; edge-on triangles neither.
 // Thread safety: pure function.
 #pragma once
 

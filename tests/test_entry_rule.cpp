@@ -272,9 +272,10 @@ TEST(EntryRule, OnARealOpenSceneGroundTruthLitReceiversRawLightsStayLit) {
   EXPECT_GT(lowered_texels, kept / 2);
 }
 
-// The reference (any covering triangle, exact square) is never above the renderer's bound (the first
-// hit's triangle, square grown for rounding), so verify accepts what the build stores; it is lower
-// where another triangle covers the square more tightly.
+// The reference (the shallowest set of any triangles covering the exact square) is never above the
+// renderer's bound (a cover grown from the first hit's triangle across shared edges, square grown for
+// rounding), so verify accepts what the build stores; it is lower where other triangles cover the
+// square more tightly.
 TEST(EntryRule, TheReferenceBoundIsNeverAboveTheRenderers) {
   RealScene r = real_scene();
   uint64_t hits = 0, close = 0, tighter = 0;
