@@ -1,6 +1,7 @@
 // `shadowtiles build SCENE --out STORE ...`: bake the sun's shadows of a scene into a store.
 #include <cstdio>
 #include <iostream>
+#include <optional>
 
 #include <spdlog/spdlog.h>
 
@@ -25,7 +26,9 @@ struct BuildFlags {
   uint32_t tile = 2048;
   unsigned threads = 2;
   std::vector<std::string> heightfields;
-  double bias_texels = 2.0, exit_margin_texels = 4.0, entry_slack_texels = 0.0;
+  double bias_texels = 2.0, exit_margin_texels = 4.0;
+  // Unset: the bias under `surfaces` (the entry rule on at the default query bias), 0 under `anywhere`.
+  std::optional<double> entry_slack_texels;
   bool overwrite = false, json = false, exit_caps = true, tile_costs = false, nearly_closed = true;
   double nearly_closed_tolerance = 0.1;
   uint64_t kill_after = 0;
@@ -64,7 +67,6 @@ int run(const BuildFlags& flags) {
   }
   config.bias_texels = flags.bias_texels;
   config.exit_margin_texels = flags.exit_margin_texels;
-  config.entry_slack_texels = flags.entry_slack_texels;
   config.overwrite = flags.overwrite;
   config.cap_exits_at_receiver_surfaces = flags.exit_caps;
   config.close_nearly_closed = flags.nearly_closed;
@@ -76,6 +78,8 @@ int run(const BuildFlags& flags) {
   auto receivers = parse_receiver_contract(flags.receivers);
   if (!receivers) { spdlog::error("--receivers must be anywhere or surfaces"); return kInvalidInput; }
   config.receivers = *receivers;
+  config.entry_slack_texels =
+      flags.entry_slack_texels.value_or(config.receivers == ReceiverContract::surfaces ? flags.bias_texels : 0.0);
   config.debug_kill_after_tiles = flags.kill_after;
   if (!flags.shard.empty()) {
     auto shard = parse_shard_spec(flags.shard);
@@ -149,8 +153,8 @@ void add_build_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--entry-slack-texels", flags->entry_slack_texels,
                   "surfaces only: the entry rule (docs/receiver-contracts.md): MH, MMH, DAG-MH and CPVS values may "
                   "lie this many texel widths of depth above the first hit where a triangle covers the texel; "
-                  "queries of those methods then need a bias of at least this (<= bias; 0: off)")
-      ->capture_default_str();
+                  "queries of those methods then need a bias of at least this (<= bias; 0: off; default: the "
+                  "bias under surfaces, 0 under anywhere)");
   cmd->add_option("--mh-construction", flags->construction, "MH family: bottom-up or top-down (SBE16a Alg. 1)")
       ->capture_default_str();
   cmd->add_option("--receivers", flags->receivers,

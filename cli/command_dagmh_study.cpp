@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <random>
 
 #include <nlohmann/json.hpp>
@@ -54,7 +55,7 @@ struct StudyFlags {
   uint64_t sample_tiles = 0;   // 0: every non-empty tile
   unsigned lookups = 20000;    // per tile, per kind and parameter point
   double exit_margin_texels = 4.0;
-  double entry_slack_texels = 0.0;
+  std::optional<double> entry_slack_texels;  // unset: as build (the default bias under surfaces)
   bool json = false;
 };
 
@@ -146,8 +147,9 @@ Result<ResolutionResult> study_resolution(const StudyFlags& flags, const Scene& 
   depth_options.receivers = parse_receiver_contract(flags.receivers).value_or(ReceiverContract::anywhere);
   depth_options.coplanar_epsilon = float(
       second_layer::coplanar_epsilon(frame->depth_from_world(build_defaults.bias_texels * frame->texel_size())));
-  if (depth_options.receivers == ReceiverContract::surfaces && flags.entry_slack_texels > 0) {
-    depth_options.entry_slack = float(frame->depth_from_world(flags.entry_slack_texels * frame->texel_size()));
+  const double entry_slack_texels = flags.entry_slack_texels.value_or(build_defaults.bias_texels);
+  if (depth_options.receivers == ReceiverContract::surfaces && entry_slack_texels > 0) {
+    depth_options.entry_slack = float(frame->depth_from_world(entry_slack_texels * frame->texel_size()));
     depth_options.entry_tolerance = float(entry_tolerance_depth(*frame, scene.bounds));
   }
   DualDepthRenderer renderer(device, light_scene, depth_options);
@@ -359,9 +361,8 @@ void add_dagmh_study_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--entry-slack-texels", flags->entry_slack_texels,
                   "surfaces only: study the entry rule for query biases of at least this many texels "
-                  "(docs/receiver-contracts.md; 0: off, as builds are)")
-      ->check(CLI::Range(0.0, 64.0))
-      ->capture_default_str();
+                  "(docs/receiver-contracts.md; 0: off; default: as build, the default bias under surfaces)")
+      ->check(CLI::Range(0.0, 64.0));
   cmd->add_flag("--json", flags->json, "Print JSON");
   cmd->callback([flags, &exit_code] { exit_code = run(*flags); });
 }

@@ -187,7 +187,8 @@ TEST(DagMhStudy, EntryRuleWidensZeroWidthIntervalsUnderSurfacesOnly) {
         << output;
     return nlohmann::json::parse(output)["resolutions"][0];
   };
-  const auto off = study("--receivers surfaces"), on = study("--receivers surfaces --entry-slack-texels 2");
+  // Off by flag; on by default, as in builds (at the default bias, 2 texels).
+  const auto off = study("--receivers surfaces --entry-slack-texels 0"), on = study("--receivers surfaces");
   EXPECT_LT(on["mh_values"]["zero_width"].get<uint64_t>(), off["mh_values"]["zero_width"].get<uint64_t>() / 2);
   EXPECT_LT(on["points"][0]["bytes"].get<uint64_t>(), off["points"][0]["bytes"].get<uint64_t>());
   EXPECT_LT(on["points"][0]["ratio_vs_cpvs"].get<double>(), off["points"][0]["ratio_vs_cpvs"].get<double>());

@@ -37,14 +37,14 @@ TEST(ReceiverContracts, BothContractsAreLosslessOnOpenScenes) {
   }
 }
 
-// The entry rule (--entry-slack-texels, docs/receiver-contracts.md): verify's brute-force reference
-// accepts every value; raw still stores the first hit (same bytes); DAG-MH shrinks; the meta records
-// the slack; queries of the interval methods refuse a smaller bias, raw's accept it; `anywhere`
-// refuses the flag.
+// The entry rule (--entry-slack-texels, docs/receiver-contracts.md; on at the bias by default under
+// `surfaces`): verify's brute-force reference accepts every value; raw still stores the first hit
+// (same bytes); DAG-MH shrinks; the meta records the slack; queries of the interval methods refuse a
+// smaller bias, raw's accept it; `anywhere` refuses the flag.
 TEST(ReceiverContracts, EntryRuleBuildsVerifyKeepRawAndRefuseSmallerBiases) {
   TempDir dir;
-  auto without = build_and_verify(kHaus, "surfaces", 512, dir.path() / "s");
-  auto with = build_and_verify(kHaus, "surfaces", 512, dir.path() / "e", "--entry-slack-texels 2");
+  auto without = build_and_verify(kHaus, "surfaces", 512, dir.path() / "s", "--entry-slack-texels 0");
+  auto with = build_and_verify(kHaus, "surfaces", 512, dir.path() / "e");  // the default: slack = bias
   EXPECT_EQ(with["bytes_by_method"]["raw"], without["bytes_by_method"]["raw"]);
   EXPECT_LT(with["bytes_by_method"]["dagmh"].get<uint64_t>(), without["bytes_by_method"]["dagmh"].get<uint64_t>() * 9 / 10);
   std::printf("fzk_haus 512^2 surfaces dagmh bytes: %llu, with the entry rule %llu\n",
@@ -117,6 +117,7 @@ TEST(ReceiverContracts, MetaWithoutTheFieldReadsAsAnywhereAndUnknownContractsAre
   EXPECT_EQ(json["receivers"], "surfaces");
   json.erase("receivers");
   json.erase("exit_caps");
+  json.erase("entry_slack");
   auto old = StoreMeta::from_json(json);  // a store built before contracts
   ASSERT_TRUE(old.ok()) << old.error().message;
   EXPECT_EQ(old->receivers, ReceiverContract::anywhere);
@@ -149,7 +150,9 @@ TEST(ReceiverContracts, ServerAnswersAndTheHttpClientNameTheContract) {
   auto meta_json = nlohmann::json::parse(meta->body);
   EXPECT_EQ(meta_json["shadow"]["receivers"], "surfaces");
   EXPECT_EQ(meta_json["shadow"]["exit_caps"], true);
-  EXPECT_EQ(meta_json["shadow"]["entry_slack"], 0.0);  // built without the entry rule
+  // Built with the default: the entry rule on at the default query bias.
+  EXPECT_GT(meta_json["shadow"]["entry_slack"].get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(meta_json["shadow"]["entry_slack"].get<double>(), meta_json["shadow"]["default_bias"].get<double>());
   auto point = client.Get("/v1/shadow?x=5&y=2&z=-5");
   ASSERT_TRUE(point && point->status == 200) << (point ? point->body : "no answer");
   EXPECT_EQ(nlohmann::json::parse(point->body)["receivers"], "surfaces");
