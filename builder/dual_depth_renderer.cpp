@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "builder/receiver_surface_caps.hpp"
+#include "common/float_rounding.hpp"
 #include "builder/ground_truth.hpp"
 #include "builder/second_layer_caps.hpp"
 #include "builder/second_layer_rule.hpp"
@@ -329,6 +330,17 @@ DepthInterval resolve_surfaces_interval(std::vector<ClosedHit>& hits, const Dual
   return interval;
 }
 
+constexpr double kEntrySquareHalf = 0.51;
+
+// min(lower, deepest + tolerance - slack), rounded up to a float and one float step more: never
+// below the exact bound, nor below verify's reference (builder/reference_entry_bounds.hpp), which
+// evaluates the same planes another way.
+float entry_bound(double deepest, float lower, float slack, float tolerance) {
+  const double entry = deepest + double(tolerance) - double(slack);
+  if (entry >= double(lower)) return lower;
+  return std::clamp(next_float_up(float_at_least(entry)), 0.0f, lower);
+}
+
 // The entry rule (DualDepthOptions::entry_slack). `first_prim` is the centre ray's first-hit triangle
 // (in the open set when `open`), (cu, cv) the texel centre in tile-local texels, (global_u, global_v)
 // in the map's. The rule needs triangles whose footprints cover the texel's whole square S: then the
@@ -343,7 +355,6 @@ DepthInterval resolve_surfaces_interval(std::vector<ClosedHit>& hits, const Dual
 // folded under), and the set stays small: the union's boundary then lies on edges that miss S (around
 // a vertex in S the triangles form a closed, unfolded fan), and S, connected and holding the centre,
 // lies inside it. docs/receiver-contracts.md, "The entry rule", has the argument.
-constexpr double kEntrySquareHalf = 0.51;
 constexpr int kMaxCoverTriangles = 24;  // more: lower stays the first hit (a bounded cost per texel)
 float entry_lower(const TileGeometry& geometry, const LightSpaceScene& scene, bool open, uint32_t first_prim,
                   double cu, double cv, double global_u, double global_v, float lower, float slack, float tolerance) {
@@ -404,15 +415,121 @@ float entry_lower(const TileGeometry& geometry, const LightSpaceScene& scene, bo
         p.depth + p.du * (global_u - p.u) + p.dv * (global_v - p.v) + 0.5 * (std::fabs(p.du) + std::fabs(p.dv));
     deepest = std::max(deepest, std::min(over_square, p.highest));
   }
-  const double entry = deepest + double(tolerance) - double(slack);
-  if (entry >= double(lower)) return lower;
-  // Rounded up to a float and one float step more: never below the exact bound, nor below verify's
-  // reference (builder/reference_entry_bounds.hpp), which evaluates the same planes another way.
-  float bound = float(entry);
-  if (double(bound) < entry) bound = std::nextafter(bound, std::numeric_limits<float>::infinity());
-  bound = std::nextafter(bound, std::numeric_limits<float>::infinity());
-  return std::clamp(bound, 0.0f, lower);
+  return entry_bound(deepest, lower, slack, tolerance);
 }
+
+// The entry pass over a tile, in the common cases first: a square inside its first-hit triangle, or
+// inside it and the triangle across the one edge that crosses it (the cover entry_lower would grow).
+// Per triangle, once for a run of texels that hit it: its edge lines and plane in global texel
+// coordinates, and for each edge the triangle across it (when it lies on the other side, not folded)
+// with that triangle's two other edge lines and plane. A square lies inside an edge's half-plane when
+// the line's value at its centre exceeds the grown square's half-extent along the line's normal.
+// Anything else goes to entry_lower's search.
+class EntryFastPath {
+ public:
+  EntryFastPath(const TileGeometry& geometry, const LightSpaceScene& scene, double tile_u0, double tile_v0)
+      : geometry_(geometry), scene_(scene), tile_u0_(tile_u0), tile_v0_(tile_v0) {}
+
+  // The largest depth over the square centred at global (gu, gv) of the cover found, for a first hit
+  // `key` (prim | open flag); NaN when neither common case applies.
+  double deepest(uint32_t key, bool open, uint32_t prim, double gu, double gv) {
+    const double none = std::numeric_limits<double>::quiet_NaN();
+    if (key != key_) prepare(open, prim, key);
+    if (!triangle_.usable) return none;
+    int crossed = -1;
+    for (int k = 0; k < 3; ++k) {
+      if (triangle_.edge[k].holds(gu, gv)) continue;
+      if (crossed >= 0) return none;
+      crossed = k;
+    }
+    const double own = triangle_.plane.deepest(gu, gv);
+    if (crossed < 0) return own;
+    const Across& across = across_[crossed];
+    if (!across.usable || !across.edge[0].holds(gu, gv) || !across.edge[1].holds(gu, gv)) return none;
+    return std::max(own, across.plane.deepest(gu, gv));
+  }
+
+ private:
+  struct Line {  // a (gu) + b (gv) + c, positive inside
+    double a = 0, b = 0, c = 0, margin = 0;
+    bool holds(double gu, double gv) const { return a * gu + b * gv + c > margin; }
+  };
+  struct Plane {  // the plane's largest depth over the square centred at (gu, gv), at most its deepest vertex
+    double du = 0, dv = 0, c = 0, highest = 0;
+    double deepest(double gu, double gv) const { return std::min(du * gu + dv * gv + c, highest); }
+  };
+  struct Triangle {
+    bool usable = false;
+    Line edge[3];
+    Plane plane;
+  };
+  struct Across {
+    bool usable = false;
+    Line edge[2];  // the triangle across's edges other than the shared one
+    Plane plane;
+  };
+
+  // Edge k of a footprint (tile-local floats) as a global line, inner side positive.
+  Line line(const float* t, int k, double orientation) const {
+    const float* p = t + 3 * k;
+    const float* q = t + 3 * ((k + 1) % 3);
+    const double a = -(double(q[1]) - p[1]), b = double(q[0]) - p[0];
+    return {orientation * a, orientation * b, -orientation * (a * (tile_u0_ + p[0]) + b * (tile_v0_ + p[1])),
+            kEntrySquareHalf * (std::fabs(a) + std::fabs(b))};
+  }
+  static Plane plane_of(const DepthPlane& p) {
+    return {p.du, p.dv, p.depth - p.du * p.u - p.dv * p.v + 0.5 * (std::fabs(p.du) + std::fabs(p.dv)), p.highest};
+  }
+  // The footprint of `prim` and its orientation (+1 counter-clockwise, -1 clockwise, 0 none or edge-on).
+  double orientation(bool open, uint32_t prim, const float** t) const {
+    *t = &(open ? geometry_.open_vertices : geometry_.closed_vertices)[size_t(prim) * 9];
+    const float* x = *t;
+    const double area = (double(x[3]) - x[0]) * (double(x[7]) - x[1]) - (double(x[4]) - x[1]) * (double(x[6]) - x[0]);
+    if ((open ? geometry_.open_planes : geometry_.closed_planes)[prim].edge_on || area == 0) return 0;
+    return area > 0 ? 1.0 : -1.0;
+  }
+  double side(uint32_t p, uint32_t q, uint32_t r) const {
+    const LightSpacePoint &a = scene_.vertex(p), &b = scene_.vertex(q), &c = scene_.vertex(r);
+    return (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
+  }
+
+  void prepare(bool open, uint32_t prim, uint32_t key) {
+    key_ = key;
+    const float* t;
+    const double own = orientation(open, prim, &t);
+    triangle_.usable = own != 0;
+    if (!triangle_.usable) return;
+    const auto& planes = open ? geometry_.open_planes : geometry_.closed_planes;
+    const auto& neighbours = open ? geometry_.open_neighbours : geometry_.closed_neighbours;
+    const auto& ids = open ? geometry_.open_ids : geometry_.closed_ids;
+    for (int k = 0; k < 3; ++k) triangle_.edge[k] = line(t, k, own);
+    triangle_.plane = plane_of(planes[prim]);
+    for (int k = 0; k < 3; ++k) {
+      Across& across = across_[k];
+      const EdgeNeighbour n = neighbours[prim][size_t(k)];
+      const float* o;
+      const double theirs = n.prim < 0 ? 0 : orientation(open, uint32_t(n.prim), &o);
+      across.usable = theirs != 0;
+      if (!across.usable) continue;
+      // Not folded: the two opposite vertices on the shared edge's two sides (double vertices).
+      const uint32_t a = ids[size_t(prim) * 3 + k], b = ids[size_t(prim) * 3 + (k + 1) % 3];
+      const double mine_side = side(a, b, ids[size_t(prim) * 3 + (k + 2) % 3]);
+      const double their_side = side(a, b, ids[size_t(n.prim) * 3 + (n.edge + 2) % 3]);
+      across.usable = (mine_side > 0 && their_side < 0) || (mine_side < 0 && their_side > 0);
+      if (!across.usable) continue;
+      across.edge[0] = line(o, (n.edge + 1) % 3, theirs);
+      across.edge[1] = line(o, (n.edge + 2) % 3, theirs);
+      across.plane = plane_of(planes[size_t(n.prim)]);
+    }
+  }
+
+  const TileGeometry& geometry_;
+  const LightSpaceScene& scene_;
+  double tile_u0_, tile_v0_;
+  uint32_t key_ = std::numeric_limits<uint32_t>::max();
+  Triangle triangle_;
+  Across across_[3];
+};
 
 }  // namespace
 
@@ -469,9 +586,9 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
   local.bvh_seconds = seconds_since(bvh_start);
 
   auto ray_start = Clock::now();
-  // The entry rule's: each hit texel's first-hit triangle, its primitive id with the open set's flag.
+  // The entry rule's: the row's first-hit triangles, primitive id with the open set's flag.
   constexpr uint32_t kOpenFlag = 1u << 31;
-  std::vector<uint32_t> first_hits(entry_rule ? size_t(size) * size : 0);
+  std::vector<uint32_t> first_hits(entry_rule ? size : 0);
   std::array<std::vector<ClosedHit>, kPacket> lanes;
   CollectContext context;
   rtcInitIntersectContext(&context.base);
@@ -481,6 +598,23 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
   alignas(64) int valid[kPacket];
   const float inf = std::numeric_limits<float>::infinity();
   const uint64_t tile_u0 = uint64_t(tile.x) * size, tile_v0 = uint64_t(tile.y) * size;
+  // The entry rule's pass runs row by row while the row is in cache, timed apart from the rays.
+  EntryFastPath fast(geometry, scene_, double(tile_u0), double(tile_v0));
+  auto entry_row = [&](uint32_t v) {
+    for (uint32_t u = 0; u < size; ++u) {
+      const size_t i = size_t(v) * size + u;
+      const float lower = intervals.texels[i].lower;
+      if (!(lower < 1.0f)) continue;
+      const bool open = (first_hits[u] & kOpenFlag) != 0;
+      const uint32_t prim = first_hits[u] & ~kOpenFlag;
+      const double gu = double(tile_u0) + u + 0.5, gv = double(tile_v0) + v + 0.5;
+      const double deepest = fast.deepest(first_hits[u], open, prim, gu, gv);
+      intervals.entry_lower[i] =
+          deepest == deepest ? entry_bound(deepest, lower, options_.entry_slack, options_.entry_tolerance)
+                             : entry_lower(geometry, scene_, open, prim, u + 0.5, v + 0.5, gu, gv, lower,
+                                           options_.entry_slack, options_.entry_tolerance);
+    }
+  };
   for (uint32_t v = 0; v < size; ++v) {
     for (uint32_t u_start = 0; u_start < size; u_start += kPacket) {
       for (unsigned lane = 0; lane < kPacket; ++lane) {
@@ -514,27 +648,20 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
           hit.t = (hit.open ? geometry.open_planes : geometry.closed_planes)[hit.prim].at(centre_u, centre_v, hit.t);
         DepthInterval interval = surfaces ? resolve_surfaces_interval(lanes[lane], options_)
                                           : resolve_interval(lanes[lane], open_t, options_);
-        if (entry_rule && interval.lower < 1.0f) first_hits[size_t(v) * size + u_start + lane] = lanes[lane].front().prim | (lanes[lane].front().open ? kOpenFlag : 0);
+        if (entry_rule && interval.lower < 1.0f) first_hits[u_start + lane] =
+              lanes[lane].front().prim | (lanes[lane].front().open ? kOpenFlag : 0);
         intervals.at(u_start + lane, v) = interval;
         if (interval.lower < 1.0f) ++local.hits;
       }
     }
+    if (entry_rule) {
+      const auto entry_start = Clock::now();
+      entry_row(v);
+      local.entry_seconds += seconds_since(entry_start);
+    }
   }
   (void)closed_id;
-  local.ray_seconds = seconds_since(ray_start);
-  if (entry_rule) {
-    const auto entry_start = Clock::now();
-    for (uint32_t v = 0; v < size; ++v)
-      for (uint32_t u = 0; u < size; ++u) {
-        const size_t i = size_t(v) * size + u;
-        const float lower = intervals.texels[i].lower;
-        if (lower < 1.0f)
-          intervals.entry_lower[i] = entry_lower(geometry, scene_, (first_hits[i] & kOpenFlag) != 0, first_hits[i] & ~kOpenFlag, u + 0.5, v + 0.5,
-                                                 double(tile_u0) + u + 0.5, double(tile_v0) + v + 0.5, lower,
-                                                 options_.entry_slack, options_.entry_tolerance);
-      }
-    local.entry_seconds = seconds_since(entry_start);
-  }
+  local.ray_seconds = seconds_since(ray_start) - local.entry_seconds;
   local.rays = uint64_t(size) * size;
   if (stats) stats->add(local);
   return intervals;

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "common/float_rounding.hpp"
+
 namespace shadowtiles {
 namespace {
 
@@ -247,8 +249,7 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
   // the same bit for bit (a closed mesh's back faces reach a texel from several regions).
   const double shallowest = std::min({a.depth, b.depth, c.depth});
   const double below = shallowest - 1e-12 * (1.0 + std::fabs(shallowest));
-  float floor_cap = float(below);
-  if (double(floor_cap) > below) floor_cap = std::nextafter(floor_cap, -std::numeric_limits<float>::infinity());
+  const float floor_cap = float_at_most(below);
   auto clip_texel = [&](uint32_t i, uint32_t j, double su, double sv) {
     float& slot = cap[size_t(j) * size + i];
     if (slot <= floor_cap) {

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "common/float_rounding.hpp"
+
 namespace shadowtiles {
 namespace {
 
@@ -159,9 +161,7 @@ std::vector<float> reference_entry_bounds(const LightSpaceScene& scene, TileCoor
       if (cover_depth == std::numeric_limits<double>::infinity()) continue;
       const double entry = cover_depth + tolerance - slack;
       if (entry >= double(first)) continue;
-      float bound = float(entry);
-      if (double(bound) < entry) bound = std::nextafter(bound, std::numeric_limits<float>::infinity());
-      bounds[i] = std::max(0.0f, bound);
+      bounds[i] = std::max(0.0f, float_at_least(entry));
     }
   return bounds;
 }
