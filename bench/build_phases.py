@@ -28,7 +28,7 @@ def main():
     doc, entries = load(args.run)
     before = load(args.before)[1] if args.before else {}
     head = ["scene", "contract", "tiles"] + (["before wall/rays"] if before else []) + [
-        "wall/rays", "wall s", "rays", "caps", "MH (build, encode, zstd)", "MMH (merge, encode, zstd)",
+        "wall/rays", "wall s", "rays", "caps", "entry rule", "MH (build, encode, zstd)", "MMH (merge, encode, zstd)",
         "DAG-MH (encode, zstd)", "previews", "LMDB writes", "idle"]
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
@@ -37,7 +37,7 @@ def main():
         t = s["threads"]
         sec, em = s["seconds"], s["encode_seconds_by_method"]
         rays = (sec["bvh_thread_sum"] + sec["rays_thread_sum"]) / t
-        parts = [sec["caps_thread_sum"], em.get("mh", 0), em.get("mmh", 0), em.get("dagmh", 0),
+        parts = [sec["caps_thread_sum"], sec.get("entry_rule_thread_sum", 0), em.get("mh", 0), em.get("mmh", 0), em.get("dagmh", 0),
                  sec["preview_thread_sum"], sec["store_thread_sum"]]
         idle = sec["render_wall"] - rays - sum(parts) / t
         row = [e["scene"], key[1], str(s["tiles"]["with_triangles"])]
