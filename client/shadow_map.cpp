@@ -4,6 +4,7 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
+#include <limits>
 
 #include "store/blob.hpp"
 #include "store/lmdb_store.hpp"
@@ -61,6 +62,10 @@ ShadowMap::ShadowMap(std::shared_ptr<const TileSource> source, StoreMeta meta, L
       tile_shift_(layout.levels_in_tile()),
       id_(next_id()) {
   for (store::Method m : meta_.methods) method_present_[uint8_t(m)] = true;
+  for (size_t m = 0; m < bias_floor_.size(); ++m) {
+    const double floor = meta_.min_query_bias(store::Method(m));
+    bias_floor_[m] = floor > 0 ? floor * (1 - 1e-9) : -std::numeric_limits<double>::infinity();
+  }
 }
 
 namespace {
@@ -110,14 +115,12 @@ uint64_t ShadowMap::next_id() {
 }
 
 Status ShadowMap::check_bias(store::Method method, double bias_world) const {
-  // Relative slack for the rounding of two equal products (bias and slack in texel widths).
+  if (!(bias_world < bias_floor_[uint8_t(method)])) return {};
   const double floor = meta_.min_query_bias(method);
-  if (floor > 0 && bias_world < floor * (1 - 1e-9))
-    return make_error(ErrorCode::invalid_input,
-                      "bias " + std::to_string(bias_world) + " is below " + std::to_string(floor) + ", the least bias " +
-                          store::method_name(method) +
-                          " answers for in this store (built with an entry slack: docs/receiver-contracts.md)");
-  return {};
+  return make_error(ErrorCode::invalid_input,
+                    "bias " + std::to_string(bias_world) + " is below " + std::to_string(floor) + ", the least bias " +
+                        store::method_name(method) +
+                        " answers for in this store (built with an entry slack: docs/receiver-contracts.md)");
 }
 
 Status ShadowMap::check_method(store::Method method) const {

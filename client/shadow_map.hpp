@@ -188,6 +188,9 @@ class ShadowMap {
   TileLayout layout_;
   Options options_;
   std::array<bool, 256> method_present_{};  // by method byte: one check per call, no search
+  // By method byte: the least bias answered (StoreMeta::min_query_bias less a relative 1e-9 for the
+  // rounding of two equal products), -infinity where any bias is.
+  std::array<double, 256> bias_floor_{};
   unsigned tile_shift_ = 0;                 // log2(tile size)
 
   // Bumped (under cache_mutex_) whenever the cache evicts: threads then drop their pins. Read on
