@@ -70,10 +70,10 @@ struct DualDepthOptions {
   ReceiverContract receivers = ReceiverContract::anywhere;
   // `surfaces`: surfaces closer than this (normalised depth) are one (second_layer::coplanar_epsilon).
   float coplanar_epsilon = 1e-6f;
-  // `surfaces`, the entry rule (docs/receiver-contracts.md; studied, not yet used by builds): the
-  // smallest query bias the values must answer for (normalised depth); 0 = off. Above 0, render()
-  // also fills TileIntervals::entry_lower: for a texel whose square lies inside its first-hit
-  // triangle's footprint, min(first hit, that triangle's deepest corner + entry_tolerance -
+  // `surfaces`, the entry rule (docs/receiver-contracts.md; builder/entry_cover.hpp): the smallest
+  // query bias the values must answer for (normalised depth); 0 = off. Above 0, render() also fills
+  // TileIntervals::entry_lower: for a texel whose square a cover of triangles grown from its first-hit
+  // triangle holds, min(first hit, the cover's largest depth over the square + entry_tolerance -
   // entry_slack), else the first hit. Any value from there up to the capped upper answers every
   // receiver at least as raw does; apply_entry_rule() moves it into the intervals.
   float entry_slack = 0.0f;
