@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "common/float_rounding.hpp"
 
@@ -21,13 +22,28 @@ float entry_bound(double deepest, float lower, float slack, float tolerance) {
   return std::clamp(next_float_up(float_at_least(entry)), 0.0f, lower);
 }
 
+// Whether the triangle across edge k of `prim` lies on that edge's other side (not folded under it):
+// the two opposite vertices on the shared edge's two sides, from the scene's double vertices.
+bool lies_across(const LightSpaceScene& scene, const std::vector<uint32_t>& ids, uint32_t prim, int k,
+                 EdgeNeighbour across) {
+  auto side = [&](uint32_t p, uint32_t q, uint32_t r) {
+    const LightSpacePoint &a = scene.vertex(p), &b = scene.vertex(q), &c = scene.vertex(r);
+    return (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
+  };
+  const uint32_t a = ids[size_t(prim) * 3 + size_t(k)], b = ids[size_t(prim) * 3 + size_t(k + 1) % 3];
+  const double mine = side(a, b, ids[size_t(prim) * 3 + size_t(k + 2) % 3]);
+  const double theirs = side(a, b, ids[size_t(across.prim) * 3 + size_t(across.edge + 2) % 3]);
+  return (mine > 0 && theirs < 0) || (mine < 0 && theirs > 0);
+}
+
 // The entry rule (DualDepthOptions::entry_slack). `first_prim` is the centre ray's first-hit triangle
 // (in the open set when `open`), (cu, cv) the texel centre in tile-local texels, (global_u, global_v)
 // in the map's. The rule needs triangles whose footprints cover the texel's whole square S: then the
 // visible depth at every point of S is at most the depth of a triangle there, so a lit receiver is no
 // deeper than the largest of their depths over S plus `tolerance` (the ground truth's ray offset),
-// and with a query bias of at least `slack` any value from that depth less `slack` lights it. Else (S reaches a hole, a mesh's border, a
-// silhouette fold or an edge-on triangle) lower stays the first hit.
+// and with a query bias of at least `slack` any value from that depth less `slack` lights it. Else
+// (S reaches a hole, a mesh's border, a silhouette fold or an edge-on triangle) lower stays the first
+// hit.
 //
 // The cover is grown from the first-hit triangle across every edge that meets S (the square grown by
 // a hundredth of a texel, for the footprints' float rounding) to the triangle on that edge's other
@@ -58,11 +74,6 @@ float entry_lower(const TileGeometry& geometry, const LightSpaceScene& scene, bo
     }
     return positive != 4 && negative != 4;
   };
-  // Side of point r of the line p -> q, from the scene's double light-space vertices.
-  auto side = [&](uint32_t p, uint32_t q, uint32_t r) {
-    const LightSpacePoint &a = scene.vertex(p), &b = scene.vertex(q), &c = scene.vertex(r);
-    return (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
-  };
   std::array<int32_t, kMaxCoverTriangles> cover;
   int count = 0;
   cover[count++] = int32_t(first_prim);
@@ -75,11 +86,7 @@ float entry_lower(const TileGeometry& geometry, const LightSpaceScene& scene, bo
       if (!edge_meets_square(x + 3 * k, x + 3 * j)) continue;
       const EdgeNeighbour across = neighbours[size_t(prim)][size_t(k)];
       if (across.prim < 0 || planes[size_t(across.prim)].edge_on) return lower;
-      const uint32_t a = ids[size_t(prim) * 3 + k], b = ids[size_t(prim) * 3 + j];
-      const uint32_t mine = ids[size_t(prim) * 3 + (k + 2) % 3];
-      const uint32_t theirs = ids[size_t(across.prim) * 3 + (across.edge + 2) % 3];
-      const double my_side = side(a, b, mine), their_side = side(a, b, theirs);
-      if (!((my_side > 0 && their_side < 0) || (my_side < 0 && their_side > 0))) return lower;  // folded
+      if (!lies_across(scene, ids, uint32_t(prim), k, across)) return lower;  // folded
       if (std::find(cover.begin(), cover.begin() + count, across.prim) != cover.begin() + count) continue;
       if (count == kMaxCoverTriangles) return lower;
       cover[size_t(count++)] = across.prim;
@@ -170,10 +177,6 @@ class EntryCover::Fast {
     if ((open ? geometry_.open_planes : geometry_.closed_planes)[prim].edge_on || area == 0) return 0;
     return area > 0 ? 1.0 : -1.0;
   }
-  double side(uint32_t p, uint32_t q, uint32_t r) const {
-    const LightSpacePoint &a = scene_.vertex(p), &b = scene_.vertex(q), &c = scene_.vertex(r);
-    return (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
-  }
 
   void prepare(bool open, uint32_t prim, uint32_t key) {
     key_ = key;
@@ -191,13 +194,7 @@ class EntryCover::Fast {
       const EdgeNeighbour n = neighbours[prim][size_t(k)];
       const float* o;
       const double theirs = n.prim < 0 ? 0 : orientation(open, uint32_t(n.prim), &o);
-      across.usable = theirs != 0;
-      if (!across.usable) continue;
-      // Not folded: the two opposite vertices on the shared edge's two sides (double vertices).
-      const uint32_t a = ids[size_t(prim) * 3 + k], b = ids[size_t(prim) * 3 + (k + 1) % 3];
-      const double mine_side = side(a, b, ids[size_t(prim) * 3 + (k + 2) % 3]);
-      const double their_side = side(a, b, ids[size_t(n.prim) * 3 + (n.edge + 2) % 3]);
-      across.usable = (mine_side > 0 && their_side < 0) || (mine_side < 0 && their_side > 0);
+      across.usable = theirs != 0 && lies_across(scene_, ids, prim, k, n);
       if (!across.usable) continue;
       across.edge[0] = line(o, (n.edge + 1) % 3, theirs);
       across.edge[1] = line(o, (n.edge + 2) % 3, theirs);
