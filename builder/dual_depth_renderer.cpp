@@ -244,7 +244,7 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
   const float inf = std::numeric_limits<float>::infinity();
   const uint64_t tile_u0 = uint64_t(tile.x) * size, tile_v0 = uint64_t(tile.y) * size;
   // The entry rule's pass runs row by row while the row is in cache, timed apart from the rays.
-  EntryCover entry_cover(geometry, scene_, tile, size, options_.entry_slack, options_.entry_tolerance);
+  EntryCover entry_cover(geometry, tile, size, options_.entry_slack, options_.entry_tolerance);
   auto entry_row = [&](uint32_t v) {
     for (uint32_t u = 0; u < size; ++u) {
       const size_t i = size_t(v) * size + u;

@@ -22,20 +22,6 @@ float entry_bound(double deepest, float lower, float slack, float tolerance) {
   return std::clamp(next_float_up(float_at_least(entry)), 0.0f, lower);
 }
 
-// Whether the triangle across edge k of `prim` lies on that edge's other side (not folded under it):
-// the two opposite vertices on the shared edge's two sides, from the scene's double vertices.
-bool lies_across(const LightSpaceScene& scene, const std::vector<uint32_t>& ids, uint32_t prim, int k,
-                 EdgeNeighbour across) {
-  auto side = [&](uint32_t p, uint32_t q, uint32_t r) {
-    const LightSpacePoint &a = scene.vertex(p), &b = scene.vertex(q), &c = scene.vertex(r);
-    return (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
-  };
-  const uint32_t a = ids[size_t(prim) * 3 + size_t(k)], b = ids[size_t(prim) * 3 + size_t(k + 1) % 3];
-  const double mine = side(a, b, ids[size_t(prim) * 3 + size_t(k + 2) % 3]);
-  const double theirs = side(a, b, ids[size_t(across.prim) * 3 + size_t(across.edge + 2) % 3]);
-  return (mine > 0 && theirs < 0) || (mine < 0 && theirs > 0);
-}
-
 // The entry rule (DualDepthOptions::entry_slack). `first_prim` is the centre ray's first-hit triangle
 // (in the open set when `open`), (cu, cv) the texel centre in tile-local texels, (global_u, global_v)
 // in the map's. The rule needs triangles whose footprints cover the texel's whole square S: then the
@@ -52,12 +38,11 @@ bool lies_across(const LightSpaceScene& scene, const std::vector<uint32_t>& ids,
 // a vertex in S the triangles form a closed, unfolded fan), and S, connected and holding the centre,
 // lies inside it. docs/receiver-contracts.md, "The entry rule", has the argument.
 constexpr int kMaxCoverTriangles = 24;  // more: lower stays the first hit (a bounded cost per texel)
-float entry_lower(const TileGeometry& geometry, const LightSpaceScene& scene, bool open, uint32_t first_prim,
+float entry_lower(const TileGeometry& geometry, bool open, uint32_t first_prim,
                   double cu, double cv, double global_u, double global_v, float lower, float slack, float tolerance) {
   const auto& planes = open ? geometry.open_planes : geometry.closed_planes;
   const auto& vertices = open ? geometry.open_vertices : geometry.closed_vertices;
   const auto& neighbours = open ? geometry.open_neighbours : geometry.closed_neighbours;
-  const auto& ids = open ? geometry.open_ids : geometry.closed_ids;
   const double corner_u[4] = {cu - kEntrySquareHalf, cu + kEntrySquareHalf, cu - kEntrySquareHalf, cu + kEntrySquareHalf};
   const double corner_v[4] = {cv - kEntrySquareHalf, cv - kEntrySquareHalf, cv + kEntrySquareHalf, cv + kEntrySquareHalf};
   // Whether a footprint edge may meet the grown square: false only when its bounding box misses the
@@ -85,8 +70,7 @@ float entry_lower(const TileGeometry& geometry, const LightSpaceScene& scene, bo
       const int j = (k + 1) % 3;
       if (!edge_meets_square(x + 3 * k, x + 3 * j)) continue;
       const EdgeNeighbour across = neighbours[size_t(prim)][size_t(k)];
-      if (across.prim < 0 || planes[size_t(across.prim)].edge_on) return lower;
-      if (!lies_across(scene, ids, uint32_t(prim), k, across)) return lower;  // folded
+      if (!across.crossable) return lower;  // none, edge-on, or folded under
       if (std::find(cover.begin(), cover.begin() + count, across.prim) != cover.begin() + count) continue;
       if (count == kMaxCoverTriangles) return lower;
       cover[size_t(count++)] = across.prim;
@@ -116,8 +100,8 @@ float entry_lower(const TileGeometry& geometry, const LightSpaceScene& scene, bo
 // Anything else goes to entry_lower's search.
 class EntryCover::Fast {
  public:
-  Fast(const TileGeometry& geometry, const LightSpaceScene& scene, double tile_u0, double tile_v0)
-      : geometry_(geometry), scene_(scene), tile_u0_(tile_u0), tile_v0_(tile_v0) {}
+  Fast(const TileGeometry& geometry, double tile_u0, double tile_v0)
+      : geometry_(geometry), tile_u0_(tile_u0), tile_v0_(tile_v0) {}
 
   // The largest depth over the square centred at global (gu, gv) of the cover found, for a first hit
   // `key` (prim | open flag); NaN when neither common case applies.
@@ -186,7 +170,6 @@ class EntryCover::Fast {
     if (!triangle_.usable) return;
     const auto& planes = open ? geometry_.open_planes : geometry_.closed_planes;
     const auto& neighbours = open ? geometry_.open_neighbours : geometry_.closed_neighbours;
-    const auto& ids = open ? geometry_.open_ids : geometry_.closed_ids;
     for (int k = 0; k < 3; ++k) triangle_.edge[k] = line(t, k, own);
     triangle_.plane = plane_of(planes[prim]);
     for (int k = 0; k < 3; ++k) {
@@ -194,7 +177,7 @@ class EntryCover::Fast {
       const EdgeNeighbour n = neighbours[prim][size_t(k)];
       const float* o;
       const double theirs = n.prim < 0 ? 0 : orientation(open, uint32_t(n.prim), &o);
-      across.usable = theirs != 0 && lies_across(scene_, ids, prim, k, n);
+      across.usable = theirs != 0 && n.crossable;
       if (!across.usable) continue;
       across.edge[0] = line(o, (n.edge + 1) % 3, theirs);
       across.edge[1] = line(o, (n.edge + 2) % 3, theirs);
@@ -203,7 +186,6 @@ class EntryCover::Fast {
   }
 
   const TileGeometry& geometry_;
-  const LightSpaceScene& scene_;
   double tile_u0_, tile_v0_;
   uint32_t key_ = std::numeric_limits<uint32_t>::max();
   Triangle triangle_;
@@ -211,15 +193,14 @@ class EntryCover::Fast {
 };
 
 
-EntryCover::EntryCover(const TileGeometry& geometry, const LightSpaceScene& scene, TileCoord tile, uint32_t tile_size,
+EntryCover::EntryCover(const TileGeometry& geometry, TileCoord tile, uint32_t tile_size,
                        float slack, float tolerance)
     : geometry_(geometry),
-      scene_(scene),
       tile_u0_(double(tile.x) * tile_size),
       tile_v0_(double(tile.y) * tile_size),
       slack_(slack),
       tolerance_(tolerance),
-      fast_(std::make_unique<Fast>(geometry, scene, tile_u0_, tile_v0_)) {}
+      fast_(std::make_unique<Fast>(geometry, tile_u0_, tile_v0_)) {}
 
 EntryCover::~EntryCover() = default;
 
@@ -228,7 +209,7 @@ float EntryCover::bound(bool open, uint32_t prim, uint32_t u, uint32_t v, float 
   const uint32_t key = prim | (open ? 1u << 31 : 0u);
   const double deepest = fast_->deepest(key, open, prim, gu, gv);
   if (deepest == deepest) return entry_bound(deepest, lower, slack_, tolerance_);
-  return entry_lower(geometry_, scene_, open, prim, u + 0.5, v + 0.5, gu, gv, lower, slack_, tolerance_);
+  return entry_lower(geometry_, open, prim, u + 0.5, v + 0.5, gu, gv, lower, slack_, tolerance_);
 }
 
 }  // namespace shadowtiles

@@ -16,7 +16,7 @@ namespace shadowtiles {
 class EntryCover {
  public:
   // `slack`, `tolerance`: DualDepthOptions::entry_slack and entry_tolerance (normalised depth).
-  EntryCover(const TileGeometry& geometry, const LightSpaceScene& scene, TileCoord tile, uint32_t tile_size,
+  EntryCover(const TileGeometry& geometry, TileCoord tile, uint32_t tile_size,
              float slack, float tolerance);
   ~EntryCover();
   EntryCover(const EntryCover&) = delete;
@@ -29,7 +29,6 @@ class EntryCover {
  private:
   class Fast;
   const TileGeometry& geometry_;
-  const LightSpaceScene& scene_;
   double tile_u0_, tile_v0_;
   float slack_, tolerance_;
   std::unique_ptr<Fast> fast_;

@@ -48,6 +48,29 @@ std::vector<EdgeNeighbours> link_edge_neighbours(const std::vector<uint32_t>& id
   return neighbours;
 }
 
+// Whether the triangle across edge k of `prim` lies on that edge's other side (not folded under it):
+// the two opposite vertices on the shared edge's two sides, from the scene's double vertices.
+bool lies_across(const LightSpaceScene& scene, const std::vector<uint32_t>& ids, uint32_t prim, int k,
+                 EdgeNeighbour across) {
+  auto side = [&](uint32_t p, uint32_t q, uint32_t r) {
+    const LightSpacePoint &a = scene.vertex(p), &b = scene.vertex(q), &c = scene.vertex(r);
+    return (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
+  };
+  const uint32_t a = ids[size_t(prim) * 3 + size_t(k)], b = ids[size_t(prim) * 3 + size_t(k + 1) % 3];
+  const double mine = side(a, b, ids[size_t(prim) * 3 + size_t(k + 2) % 3]);
+  const double theirs = side(a, b, ids[size_t(across.prim) * 3 + size_t(across.edge + 2) % 3]);
+  return (mine > 0 && theirs < 0) || (mine < 0 && theirs > 0);
+}
+
+void mark_crossable(const LightSpaceScene& scene, const std::vector<uint32_t>& ids,
+                    const std::vector<DepthPlane>& planes, std::vector<EdgeNeighbours>& neighbours) {
+  for (size_t t = 0; t < neighbours.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      EdgeNeighbour& n = neighbours[t][size_t(k)];
+      n.crossable = n.prim >= 0 && !planes[size_t(n.prim)].edge_on && lies_across(scene, ids, uint32_t(t), k, n);
+    }
+}
+
 // Front-facing toward the light: counter-clockwise seen from the light, i.e. the normal's depth
 // component is negative (the light travels +depth in a right-handed frame).
 bool faces_light(const LightSpacePoint& a, const LightSpacePoint& b, const LightSpacePoint& c) {
@@ -103,6 +126,8 @@ TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile, 
   if (with_neighbours) {
     geometry.closed_neighbours = link_edge_neighbours(closed_ids, geometry.closed.patch);
     geometry.open_neighbours = link_edge_neighbours(open_ids, geometry.open.patch);
+    mark_crossable(scene, closed_ids, geometry.closed_planes, geometry.closed_neighbours);
+    mark_crossable(scene, open_ids, geometry.open_planes, geometry.open_neighbours);
   }
   return geometry;
 }

@@ -54,9 +54,13 @@ struct DepthPlane {
 
 // The triangle across one edge of another, in the same set: its primitive id and the index of the
 // shared edge in it (edge k runs from vertex k to vertex k + 1); prim < 0 when there is none.
+// `crossable`: the entry rule's cover may grow across the edge: there is a triangle, not edge-on, and
+// it lies on the edge's other side (not folded under), by the scene's double vertices. Computed once
+// per tile: the entry pass asks it for most texels near an edge.
 struct EdgeNeighbour {
   int32_t prim = -1;
   int32_t edge = -1;
+  bool crossable = false;
 };
 using EdgeNeighbours = std::array<EdgeNeighbour, 3>;
 
