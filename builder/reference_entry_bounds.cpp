@@ -18,7 +18,8 @@ using Polygon = std::vector<Point2>;
 // Pieces of the remainder smaller than this (texels squared) count as covered: slivers of rounding
 // along edges two triangles share.
 constexpr double kSliverArea = 1e-9;
-constexpr size_t kMaxPieces = 256;  // more: the square counts as not covered (its bound stays the first hit)
+constexpr size_t kIncrementalPieces = 64;  // more: the depth-order pass hands over to bisection
+constexpr size_t kMaxPieces = 4096;  // more in a bisection step: that prefix counts as not covering
 
 double cross(const Point2& a, const Point2& b, const Point2& p) {
   return (b.u - a.u) * (p.v - a.v) - (b.v - a.v) * (p.u - a.u);
@@ -63,8 +64,18 @@ struct Footprint {
   }
 };
 
-// The convex pieces of `polygon` outside the triangle.
+// The convex pieces of `polygon` outside the triangle. A polygon wholly outside one of its edges is
+// kept whole: cutting it along the triangle's edge lines would split it into pieces that still cover
+// the same area (on a dense tile the remainder then fragmented past any bound and the square read
+// as not covered; honolulu 4096^2 had 552 texels whose bound the build proved and this could not).
 void subtract(const Polygon& polygon, const Footprint& t, std::vector<Polygon>& out) {
+  for (int k = 0; k < 3; ++k) {
+    const Point2 &a = t.corner[size_t(k)], &b = t.corner[size_t((k + 1) % 3)];
+    if (std::all_of(polygon.begin(), polygon.end(), [&](const Point2& p) { return cross(a, b, p) <= 0; })) {
+      out.push_back(polygon);
+      return;
+    }
+  }
   Polygon inside = polygon;
   for (int k = 0; k < 3 && inside.size() >= 3; ++k) {
     const Point2 &a = t.corner[size_t(k)], &b = t.corner[size_t((k + 1) % 3)];
@@ -74,14 +85,44 @@ void subtract(const Polygon& polygon, const Footprint& t, std::vector<Polygon>& 
   }
 }
 
-// The largest depth of a triangle over its part of the square; -inf when that part has no area.
-double deepest_over(const Footprint& t, const Polygon& square) {
+// A triangle over the square: the largest depth of its part there (-inf when that part has no
+// area) and the part's area.
+struct OverSquare {
+  double deepest = -std::numeric_limits<double>::infinity();
+  double area = 0;
+};
+OverSquare over_square(const Footprint& t, const Polygon& square) {
   Polygon part = square;
   for (int k = 0; k < 3 && part.size() >= 3; ++k) part = clip(part, t.corner[size_t(k)], t.corner[size_t((k + 1) % 3)], true);
-  if (part.size() < 3 || area(part) <= 0) return -std::numeric_limits<double>::infinity();
-  double deepest = -std::numeric_limits<double>::infinity();
-  for (const Point2& p : part) deepest = std::max(deepest, t.depth_at(p));
-  return deepest;
+  OverSquare over;
+  if (part.size() < 3) return over;
+  over.area = area(part);
+  if (over.area <= 0) return over;
+  for (const Point2& p : part) over.deepest = std::max(over.deepest, t.depth_at(p));
+  return over;
+}
+
+struct Candidate {
+  double deepest;  // over the square
+  double area;     // of its part of the square
+  uint32_t footprint;
+};
+
+// Whether `chosen` cover the square (its remainder: nothing but slivers). The largest parts go first,
+// so that a few large triangles leave little for many small ones to cut up; false (not covered, so
+// the bound stays the first hit) when the remainder still splits into more than kMaxPieces pieces.
+bool covers(std::vector<Candidate>& chosen, const std::vector<Footprint>& footprints, const Polygon& square,
+            std::vector<Polygon>& remainder, std::vector<Polygon>& next) {
+  std::sort(chosen.begin(), chosen.end(), [](const Candidate& a, const Candidate& b) { return a.area > b.area; });
+  remainder.assign(1, square);
+  for (const Candidate& c : chosen) {
+    next.clear();
+    for (const Polygon& piece : remainder) subtract(piece, footprints[c.footprint], next);
+    remainder.swap(next);
+    if (remainder.empty()) return true;
+    if (remainder.size() > kMaxPieces) return false;
+  }
+  return false;
 }
 
 }  // namespace
@@ -130,7 +171,7 @@ std::vector<float> reference_entry_bounds(const LightSpaceScene& scene, TileCoor
   }
 
   std::vector<float> bounds(first_hits.texels.size());
-  std::vector<std::pair<double, uint32_t>> candidates;  // (deepest over the square, footprint)
+  std::vector<Candidate> candidates, chosen;
   std::vector<Polygon> remainder, next;
   for (uint32_t v = 0; v < size; ++v)
     for (uint32_t u = 0; u < size; ++u) {
@@ -141,22 +182,45 @@ std::vector<float> reference_entry_bounds(const LightSpaceScene& scene, TileCoor
       const Polygon square{{double(u), double(v)}, {u + 1.0, double(v)}, {u + 1.0, v + 1.0}, {double(u), v + 1.0}};
       candidates.clear();
       for (uint32_t f : binned[size_t(v / kBin) * bins + u / kBin]) {
-        const double deepest = deepest_over(footprints[f], square);
-        if (deepest > -std::numeric_limits<double>::infinity()) candidates.push_back({deepest, f});
+        const OverSquare over = over_square(footprints[f], square);
+        if (over.deepest > -std::numeric_limits<double>::infinity()) candidates.push_back({over.deepest, over.area, f});
       }
-      std::sort(candidates.begin(), candidates.end());
-      // The smallest depth B such that the triangles no deeper than B over the square cover it.
-      remainder.assign(1, square);
+      std::sort(candidates.begin(), candidates.end(),
+                [](const Candidate& a, const Candidate& b) { return a.deepest < b.deepest; });
+      // The smallest depth B such that the triangles no deeper than B over the square cover it: the
+      // shortest covering prefix of the candidates by depth. Subtracted one by one in depth order,
+      // the square's remainder tells at each step; on a dense square (many small triangles cutting it
+      // up before a large one comes) that fragments, and the prefix is then found by bisection
+      // (covering only grows with the prefix), each prefix subtracted largest part first.
       double cover_depth = std::numeric_limits<double>::infinity();
-      for (const auto& [deepest, f] : candidates) {
+      remainder.assign(1, square);
+      size_t not_covering = 0;  // a prefix length known not to cover
+      bool fragmented = false;
+      for (size_t c = 0; c < candidates.size(); ++c) {
         next.clear();
-        for (const Polygon& piece : remainder) subtract(piece, footprints[f], next);
+        for (const Polygon& piece : remainder) subtract(piece, footprints[candidates[c].footprint], next);
         remainder.swap(next);
         if (remainder.empty()) {
-          cover_depth = deepest;
+          cover_depth = candidates[c].deepest;
           break;
         }
-        if (remainder.size() > kMaxPieces) break;
+        not_covering = c + 1;
+        if (remainder.size() > kIncrementalPieces) {
+          fragmented = true;
+          break;
+        }
+      }
+      auto prefix_covers = [&](size_t count) {
+        chosen.assign(candidates.begin(), candidates.begin() + ptrdiff_t(count));
+        return covers(chosen, footprints, square, remainder, next);
+      };
+      if (fragmented && prefix_covers(candidates.size())) {
+        size_t lo = not_covering, hi = candidates.size();  // the shortest covering prefix is in (lo, hi]
+        while (hi - lo > 1) {
+          const size_t mid = lo + (hi - lo) / 2;
+          (prefix_covers(mid) ? hi : lo) = mid;
+        }
+        cover_depth = candidates[hi - 1].deepest;
       }
       if (cover_depth == std::numeric_limits<double>::infinity()) continue;
       const double entry = cover_depth + tolerance - slack;

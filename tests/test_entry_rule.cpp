@@ -205,6 +205,45 @@ TEST(EntryRule, ASquareOverTheGapBeyondASharedEdgeKeepsItsFirstHit) {
   check(17, 17, true);   // across A-B, away from its ends
 }
 
+// A square cut up by hundreds of small triangles a little shallower than a large one under them all:
+// the large one covers the square by itself, so both the renderer (its first hit) and verify's
+// reference lower the texel. In depth order the small ones come first and split the square's
+// remainder into ever more pieces (a dense tile of honolulu_airport at 4096^2 had such squares); the
+// reference must still find the cover (until 2026-12-06 it gave up past 256 pieces, and verify
+// reported 552 texels of that scene outside their intervals).
+TEST(EntryRule, TheReferenceFindsTheCoverOfASquareCutUpByManySmallTriangles) {
+  Scene scene;
+  scene.add_mesh("floor", {{-1, -1, 0}, {11, -1, 0}, {-1, 11, 0}, {11, 11, 0}}, Triangles{{0, 1, 3}, {0, 3, 2}});
+  scene.add_mesh("lid", {{-1, -1, 10}, {-0.8, -1, 10}, {-1, -0.8, 10}}, Triangles{{0, 1, 2}});
+  const auto frame = LightFrame::fit({0, 0, -1}, scene.bounds, kResolution);
+  ASSERT_TRUE(frame.ok());
+  const double depth = frame->to_light({5, 5, 2}).depth, above = frame->to_light({5, 5, 2.001}).depth;
+  auto at = [&](double u, double v, double d) { return frame->to_world({u, v, d}); };
+  scene.add_mesh("large", {at(30, 30, depth), at(60, 30, depth), at(30, 60, depth)}, Triangles{{0, 1, 2}});
+  // 18 x 18 small triangles over texel (40, 40), none at its centre.
+  std::vector<Vec3> vertices;
+  Triangles small;
+  for (int i = 0; i < 18; ++i)
+    for (int j = 0; j < 18; ++j) {
+      if (std::abs(i - 9) <= 1 && std::abs(j - 9) <= 1) continue;
+      const double u = 40 + (i + 0.3) / 18, v = 40 + (j + 0.3) / 18, side = 0.6 / 18;
+      const uint32_t base = uint32_t(vertices.size());
+      vertices.insert(vertices.end(), {at(u, v, above), at(u + side, v, above), at(u, v + side, above)});
+      small.push_back({base, base + 1, base + 2});
+    }
+  scene.add_mesh("small", vertices, small);
+  Rendered r = render(scene);
+  ASSERT_NEAR(r.frame.texel_size(), frame->texel_size(), 1e-12);  // the bounds are the floor's and lid's
+  LightSpaceScene light_scene(scene, r.frame, *TileLayout::make(kResolution, kResolution));
+  const std::vector<float> reference = reference_entry_bounds(light_scene, {0, 0}, r.intervals, r.slack, r.tolerance);
+  const size_t i = size_t(40) * kResolution + 40;
+  const float first = r.intervals.texels[i].lower;
+  ASSERT_NEAR(first, depth, 1e-6);  // the centre ray hits the large triangle
+  EXPECT_LT(r.intervals.entry_lower[i], first);
+  EXPECT_LT(reference[i], first);
+  EXPECT_LE(reference[i], r.intervals.entry_lower[i]);  // the reference is never above the renderer's bound
+}
+
 // fzk_haus at 512^2 under `surfaces` with the rule on at the build's default bias (2 texels), the
 // renderer's intervals (with its bounds beside) and verify's reference bounds from the centre intervals.
 struct RealScene {
