@@ -18,6 +18,9 @@ constexpr double kWiden = 1.0 / (1 << 20);  // texels the occluder's edges are w
 constexpr double kEpsilonShrink = 1.0 - 1.0 / (1 << 20);
 constexpr uint32_t kCell = 8;               // texels per grid cell side
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// Texels a footprint's box is padded by where it bounds a clip: far above the clips' rounding (ulps of
+// coordinates up to 2^20 texels) and far below a texel.
+constexpr double kBoxPad = 1.0 / 256;
 
 struct Prepared {
   std::array<LightSpacePoint, 3> p;
@@ -29,6 +32,11 @@ struct Prepared {
   // every point covered_by keeps; infinite for slivers whose widened corners are ill-conditioned.
   double reach_lo_u = -kInfinity, reach_hi_u = kInfinity, reach_lo_v = -kInfinity, reach_hi_v = kInfinity;
   double reach = kInfinity;  // how far a widened corner may lie from its vertex, at the most
+  // A sharp corner's widened edges meet far from it (2^-20 / sin(angle / 2) texels: a sliver on
+  // honolulu_airport reached 20 texels past its apex and capped texels there). The exact region lies
+  // in the footprint's box, so covered_by also clips to the box padded by kBoxPad when a widened
+  // corner lies outside it, and the reach box is clamped to it.
+  bool clip_to_box = false;
 
   double depth_at(double u, double v) const { return p[0].depth + gu * (u - p[0].u) + gv * (v - p[0].v); }
 };
@@ -80,6 +88,12 @@ Prepared prepare(const LightSpacePoint& a, const LightSpacePoint& b, const Light
     t.widen[k] = kWiden * std::hypot(t.A[k], t.B[k]);
   }
   widened_reach(t);
+  const double lo_u = t.lo_u - kBoxPad, hi_u = t.hi_u + kBoxPad, lo_v = t.lo_v - kBoxPad, hi_v = t.hi_v + kBoxPad;
+  t.clip_to_box = !(t.reach_lo_u >= lo_u && t.reach_hi_u <= hi_u && t.reach_lo_v >= lo_v && t.reach_hi_v <= hi_v);
+  if (t.clip_to_box) {
+    t.reach_lo_u = std::max(t.reach_lo_u, lo_u), t.reach_hi_u = std::min(t.reach_hi_u, hi_u);
+    t.reach_lo_v = std::max(t.reach_lo_v, lo_v), t.reach_hi_v = std::min(t.reach_hi_v, hi_v);
+  }
   return t;
 }
 
@@ -184,6 +198,20 @@ bool covered_by(const Prepared& back, const Prepared& front, Polygon& covered, P
     });
     std::swap(current, next);
     if (current->count < 3) return false;
+  }
+  if (front.clip_to_box) {
+    const double lo_u = front.lo_u - kBoxPad, hi_u = front.hi_u + kBoxPad;
+    const double lo_v = front.lo_v - kBoxPad, hi_v = front.hi_v + kBoxPad;
+    auto keep = [&](auto inside) {
+      clip(*current, *next, inside);
+      std::swap(current, next);
+      return current->count >= 3;
+    };
+    if (!keep([&](const LightSpacePoint& x) { return x.u - lo_u; }) ||
+        !keep([&](const LightSpacePoint& x) { return hi_u - x.u; }) ||
+        !keep([&](const LightSpacePoint& x) { return x.v - lo_v; }) ||
+        !keep([&](const LightSpacePoint& x) { return hi_v - x.v; }))
+      return false;
   }
   if (current != &covered) {
     std::copy_n(current->at.begin(), current->count, covered.at.begin());

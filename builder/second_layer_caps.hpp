@@ -12,6 +12,8 @@
 // lower_caps_by_triangle (exact per-texel clipping, closed form inside). The occluder's edges are
 // widened by 2^-20 texels and the epsilon narrowed by 2^-20 of itself so that the region found here
 // contains the exact one despite rounding: the caps are never above verify's brute-force reference.
+// Where a sharp corner's widened edges meet far outside the occluder's box (slivers), the region is
+// also clipped to that box padded by 1/256 texel, so it stays near the occluder.
 // Edge-on triangles (second_layer::edge_on) cover no area: they hide nothing and cap by their own
 // shallowest point. A pair is dropped before any clipping when an edge of either triangle separates
 // them, when `back` is behind `front` by less than kSameSurface wherever it meets a widened edge of

@@ -141,6 +141,35 @@ TEST(SecondLayerCaps, BuildCapsAreNeverAboveTheReference) {
   EXPECT_EQ(above, 0u);
 }
 
+// A sliver with a corner of ~5e-8 rad over the floor: its edges widened by 2^-20 texels meet ~40
+// texels past that corner. The floor under the sliver is its second layer (caps along the sliver's
+// row); the floor beyond the corner lies under nothing and keeps its exit, as the reference says.
+TEST(SecondLayerCaps, ASharpSliverCapsOnlyWhereItLies) {
+  Scene scene;
+  scene.add_mesh("floor", {{-1, -1, 0}, {11, -1, 0}, {-1, 11, 0}, {11, 11, 0}}, Triangles{{0, 1, 3}, {0, 3, 2}});
+  scene.add_mesh("lid", {{-1, -1, 4}, {-0.8, -1, 4}, {-1, -0.8, 4}}, Triangles{{0, 1, 2}});
+  const auto frame = LightFrame::fit({0, 0, -1}, scene.bounds, kResolution);
+  ASSERT_TRUE(frame.ok());
+  const double depth = frame->to_light({5, 5, 2}).depth;
+  auto at = [&](double u, double v) { return frame->to_world({u, v, depth}); };
+  scene.add_mesh("sliver", {at(5, 30.5), at(25, 30.5), at(5, 30.5 + 1e-6)}, Triangles{{0, 1, 2}});
+  const Built built = build(scene);
+  ASSERT_NEAR(built.frame.texel_size(), frame->texel_size(), 1e-12);
+  uint64_t under = 0, beyond = 0, beyond_capped = 0;
+  for (uint32_t u = 6; u < kResolution; ++u) {
+    const DepthInterval& fast = built.fast.at(u, 30);
+    const DepthInterval& reference = built.reference.at(u, 30);
+    ASSERT_LE(fast.upper, std::nextafter(std::nextafter(reference.upper, 2.0f), 2.0f)) << u;
+    if (u < 24) under += reference.upper < 1.0f;  // the floor under the sliver: capped
+    if (u < 27) continue;
+    ++beyond;
+    beyond_capped += fast.upper != reference.upper;
+  }
+  EXPECT_GT(under, 15u);
+  EXPECT_GT(beyond, 30u);
+  EXPECT_EQ(beyond_capped, 0u);
+}
+
 // Random triangle soups: sizes from a hundredth of a texel to the whole map, slivers, steep walls,
 // stacked and crossing faces. The fast pass drops pairs before clipping (separating edges, planes
 // nowhere behind over the pair's box); a pair dropped wrongly would leave a cap above the reference.
