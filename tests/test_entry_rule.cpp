@@ -48,12 +48,17 @@ void add_quad(Scene& scene, const std::string& name, double x0, double x1, doubl
   scene.add_mesh(name, v, Triangles{{0, 1, 3}, {0, 3, 2}});
 }
 
-Scene step_scene() {
+// A floor, and a small lid high above a corner: the surfaces added between them lie well below the
+// near plane, so their bounds are not clamped at depth 0, and they leave the map's bounds as they are.
+Scene floor_under_a_lid() {
   Scene scene;
   scene.add_mesh("floor", {{-1, -1, 0}, {11, -1, 0}, {-1, 11, 0}, {11, 11, 0}}, Triangles{{0, 1, 3}, {0, 3, 2}});
-  // A small lid high above a corner: the surfaces then lie well below the near plane, so their
-  // bounds are not clamped at depth 0.
   scene.add_mesh("lid", {{-1, -1, 10}, {-0.8, -1, 10}, {-1, -0.8, 10}}, Triangles{{0, 1, 2}});
+  return scene;
+}
+
+Scene step_scene() {
+  Scene scene = floor_under_a_lid();
   add_quad(scene, "upper", 0, kStepX, 0, 10, 0);
   add_quad(scene, "lower", kStepX, 10, 0, 10, kStep);
   add_quad(scene, "under_upper", 0.2, 4.8, 0.2, 9.8, kStep / 2);
@@ -180,9 +185,7 @@ TEST(EntryRule, InsideATriangleTheBoundIsItsDeepestCornerLessTheSlack) {
 // verify's reference may lower that texel; a square inside one triangle, and one straddling the
 // edge away from B, are lowered by both.
 TEST(EntryRule, ASquareOverTheGapBeyondASharedEdgeKeepsItsFirstHit) {
-  Scene scene;
-  scene.add_mesh("floor", {{-1, -1, 0}, {11, -1, 0}, {-1, 11, 0}, {11, 11, 0}}, Triangles{{0, 1, 3}, {0, 3, 2}});
-  scene.add_mesh("lid", {{-1, -1, 10}, {-0.8, -1, 10}, {-1, -0.8, 10}}, Triangles{{0, 1, 2}});
+  Scene scene = floor_under_a_lid();
   const auto frame = LightFrame::fit({0, 0, -1}, scene.bounds, kResolution);
   ASSERT_TRUE(frame.ok());
   // In texels from the corner (32, 32), at height 2: T = (A, B, C) and N = (A, B, D) share A-B.
@@ -212,9 +215,7 @@ TEST(EntryRule, ASquareOverTheGapBeyondASharedEdgeKeepsItsFirstHit) {
 // reference must still find the cover (until 2026-12-06 it gave up past 256 pieces, and verify
 // reported 552 texels of that scene outside their intervals).
 TEST(EntryRule, TheReferenceFindsTheCoverOfASquareCutUpByManySmallTriangles) {
-  Scene scene;
-  scene.add_mesh("floor", {{-1, -1, 0}, {11, -1, 0}, {-1, 11, 0}, {11, 11, 0}}, Triangles{{0, 1, 3}, {0, 3, 2}});
-  scene.add_mesh("lid", {{-1, -1, 10}, {-0.8, -1, 10}, {-1, -0.8, 10}}, Triangles{{0, 1, 2}});
+  Scene scene = floor_under_a_lid();
   const auto frame = LightFrame::fit({0, 0, -1}, scene.bounds, kResolution);
   ASSERT_TRUE(frame.ok());
   const double depth = frame->to_light({5, 5, 2}).depth, above = frame->to_light({5, 5, 2.001}).depth;
