@@ -85,6 +85,13 @@ void subtract(const Polygon& polygon, const Footprint& t, std::vector<Polygon>& 
   }
 }
 
+// `remainder` less the triangle, piece by piece (`next`: working space).
+void subtract_from(std::vector<Polygon>& remainder, const Footprint& t, std::vector<Polygon>& next) {
+  next.clear();
+  for (const Polygon& piece : remainder) subtract(piece, t, next);
+  remainder.swap(next);
+}
+
 // A triangle over the square: the largest depth of its part there (-inf when that part has no
 // area) and the part's area.
 struct OverSquare {
@@ -116,9 +123,7 @@ bool covers(std::vector<Candidate>& chosen, const std::vector<Footprint>& footpr
   std::sort(chosen.begin(), chosen.end(), [](const Candidate& a, const Candidate& b) { return a.area > b.area; });
   remainder.assign(1, square);
   for (const Candidate& c : chosen) {
-    next.clear();
-    for (const Polygon& piece : remainder) subtract(piece, footprints[c.footprint], next);
-    remainder.swap(next);
+    subtract_from(remainder, footprints[c.footprint], next);
     if (remainder.empty()) return true;
     if (remainder.size() > kMaxPieces) return false;
   }
@@ -197,9 +202,7 @@ std::vector<float> reference_entry_bounds(const LightSpaceScene& scene, TileCoor
       size_t not_covering = 0;  // a prefix length known not to cover
       bool fragmented = false;
       for (size_t c = 0; c < candidates.size(); ++c) {
-        next.clear();
-        for (const Polygon& piece : remainder) subtract(piece, footprints[candidates[c].footprint], next);
-        remainder.swap(next);
+        subtract_from(remainder, footprints[candidates[c].footprint], next);
         if (remainder.empty()) {
           cover_depth = candidates[c].deepest;
           break;
