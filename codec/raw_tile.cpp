@@ -53,7 +53,7 @@ Result<RawTileView> RawTileView::parse(std::span<const uint8_t> payload) {
     return corrupt("payload is " + std::to_string(payload.size()) + " bytes, expected " + std::to_string(expected));
   RawTileView view;
   view.size_ = size;
-  view.values_.resize(size_t(size) * size);
+  view.values_.resize_for_overwrite(size_t(size) * size);
   std::memcpy(view.values_.data(), payload.data() + header, view.values_.size() * sizeof(float));
   for (size_t i = 0; i < view.values_.size(); ++i)
     if (!std::isfinite(view.values_[i]))

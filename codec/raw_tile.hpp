@@ -18,6 +18,7 @@
 #include <span>
 #include <vector>
 
+#include "common/huge_page_array.hpp"
 #include "common/result.hpp"
 
 namespace shadowtiles {
@@ -47,7 +48,9 @@ class RawTileView {
 
  private:
   uint32_t size_ = 0;
-  std::vector<float> values_;
+  // In 2 MiB pages where the kernel allows: a tile of 2048^2 floats spans 4096 small pages, and
+  // lookups (a PCF kernel's rows 8 kB apart above all) would miss the TLB on nearly every read.
+  HugePageArray<float> values_;
 };
 
 }  // namespace shadowtiles
