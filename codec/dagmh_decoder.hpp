@@ -101,6 +101,8 @@ class DagMhTileView {
   void step(State& s, uint32_t u, uint32_t v) const;  // DAG node -> child
   uint32_t resolve(State s, uint32_t u, uint32_t v, unsigned stop) const;
   uint32_t treelet_find(const State& s, uint32_t u, uint32_t v, unsigned stop) const;
+  void prefetch_chunk_entry(uint32_t index) const;
+  void prefetch_chunk(uint32_t index) const;
   float value_of(uint32_t index) const;  // value_at, inlined into the walks
   // Lit samples of the box [u0, u1] x [v0, v1] from `s`, the walk toward (u0, v0) stopped at or
   // above the box's common ancestor (per sample, resuming from the previous sample's path).
