@@ -412,20 +412,19 @@ DagMhTileView::State DagMhTileView::start_state(uint32_t u, uint32_t v, unsigned
 
 float DagMhTileView::value_at(uint32_t index) const { return value_of(index); }
 
-// Starts the fetch of the chunk-table entry that value_of(index) reads first.
-[[gnu::always_inline]] inline void DagMhTileView::prefetch_chunk_entry(uint32_t index) const {
-  if (chunks_ == nullptr) return;
+// The chunk holding value `index`, clamped as value_of clamps it (for the prefetches below).
+[[gnu::always_inline]] inline uint32_t DagMhTileView::chunk_of(uint32_t index) const {
   if (index >= value_count_) index = value_count_ - 1;
-  const uint32_t c = chunk_shift_ != 0xff ? index >> chunk_shift_ : index / chunk_size_;
-  __builtin_prefetch(chunk_table_ + size_t(c) * wo_);
+  return chunk_shift_ != 0xff ? index >> chunk_shift_ : index / chunk_size_;
 }
 
-// Starts the fetch of the chunk that value_of(index) reads (its header and bitmap).
+// Start the fetches value_of(index) waits on, one after the other: its chunk-table entry, then
+// (once that entry has arrived) the chunk's header and bitmap.
+[[gnu::always_inline]] inline void DagMhTileView::prefetch_chunk_entry(uint32_t index) const {
+  if (chunks_ != nullptr) __builtin_prefetch(chunk_table_ + size_t(chunk_of(index)) * wo_);
+}
 [[gnu::always_inline]] inline void DagMhTileView::prefetch_chunk(uint32_t index) const {
-  if (chunks_ == nullptr) return;
-  if (index >= value_count_) index = value_count_ - 1;
-  const uint32_t c = chunk_shift_ != 0xff ? index >> chunk_shift_ : index / chunk_size_;
-  __builtin_prefetch(chunks_ + load_uint(chunk_table_ + size_t(c) * wo_, wo_));
+  if (chunks_ != nullptr) __builtin_prefetch(chunks_ + load_uint(chunk_table_ + size_t(chunk_of(index)) * wo_, wo_));
 }
 
 [[gnu::always_inline]] inline float DagMhTileView::value_of(uint32_t index) const {
@@ -550,9 +549,10 @@ SHADOWTILES_ISA_CLONES uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32
   uint32_t lit = 0, cached_index = UINT32_MAX, pu = u0, pv = v0;
   float cached_value = 0;
   // Two phases per group of samples: the walks give every sample's value index, then the values
-  // are read. A value costs dependent misses (chunk table, chunk, multipliers) that the walks'
-  // index alone cannot start, so the group's chunk-table entries are fetched together first: a
-  // 3x3 kernel's samples lie in up to 4 chunks, whose misses then overlap instead of queuing.
+  // are read. A value costs dependent misses (chunk-table entry, then chunk) that only its index
+  // can start, so the group's entries are requested together, then its chunks, then the values
+  // decoded: a 3x3 kernel's samples lie in up to 4 chunks, whose misses then overlap instead of
+  // queuing. (Session 15 prefetched the chunks alone and the miss moved to the entries.)
   constexpr unsigned kGroup = 32;
   uint32_t indices[kGroup];
   unsigned count = 0;

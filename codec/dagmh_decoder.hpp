@@ -101,6 +101,7 @@ class DagMhTileView {
   void step(State& s, uint32_t u, uint32_t v) const;  // DAG node -> child
   uint32_t resolve(State s, uint32_t u, uint32_t v, unsigned stop) const;
   uint32_t treelet_find(const State& s, uint32_t u, uint32_t v, unsigned stop) const;
+  uint32_t chunk_of(uint32_t index) const;
   void prefetch_chunk_entry(uint32_t index) const;
   void prefetch_chunk(uint32_t index) const;
   float value_of(uint32_t index) const;  // value_at, inlined into the walks
