@@ -9,6 +9,7 @@
 #include <string>
 
 #include "codec/dagmh_format.hpp"
+#include "codec/skip_cell_parts.hpp"
 #include "common/byte_order.hpp"
 #include "common/isa_clones.hpp"
 
@@ -512,22 +513,16 @@ SHADOWTILES_ISA_CLONES uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32
   const uint32_t u1 = u0 + kw - 1, v1 = v0 + kh - 1;
   const unsigned lca = levels_ - unsigned(std::bit_width((u0 ^ u1) | (v0 ^ v1)));
   if (skip_level_ != 0 && lca < skip_level_) {
-    // The box crosses skip list cells (a 3x3 kernel does in ~4 of 10 places at level 8): each part
-    // starts from its own entry, as MhTileView's does. From the common ancestor above the list,
-    // every level down to it would be a step (and, in a deep tree, a cache miss).
-    const unsigned shift = levels_ - skip_level_;
-    uint32_t lit = 0;
-    for (uint32_t cv = v0 >> shift; cv <= v1 >> shift; ++cv) {
-      const uint32_t pv0 = std::max(v0, cv << shift), pv1 = std::min(v1, ((cv + 1) << shift) - 1);
-      for (uint32_t cu = u0 >> shift; cu <= u1 >> shift; ++cu) {
-        const uint32_t pu0 = std::max(u0, cu << shift), pu1 = std::min(u1, ((cu + 1) << shift) - 1);
-        const unsigned part_lca = levels_ - unsigned(std::bit_width((pu0 ^ pu1) | (pv0 ^ pv1)));
-        State s = start_state(pu0, pv0, part_lca);
-        while (s.kind == kDag && s.level < part_lca) step(s, pu0, pv0);
-        lit += count_from_ancestor(s, pu0, pv0, pu1, pv1, depth, bias);
-      }
-    }
-    return lit;
+    // Across skip list cells: each part from its own entry (codec/skip_cell_parts.hpp).
+    return sum_over_skip_cell_parts(u0, v0, u1, v1, levels_ - skip_level_,
+                                    [&](uint32_t pu0, uint32_t pv0, uint32_t pu1, uint32_t pv1)
+                                        __attribute__((always_inline)) {
+                                      const unsigned part_lca =
+                                          levels_ - unsigned(std::bit_width((pu0 ^ pu1) | (pv0 ^ pv1)));
+                                      State s = start_state(pu0, pv0, part_lca);
+                                      while (s.kind == kDag && s.level < part_lca) step(s, pu0, pv0);
+                                      return count_from_ancestor(s, pu0, pv0, pu1, pv1, depth, bias);
+                                    });
   }
   State s = start_state(u0, v0, lca);
   while (s.kind == kDag && s.level < lca) step(s, u0, v0);
@@ -556,7 +551,8 @@ SHADOWTILES_ISA_CLONES uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32
   constexpr unsigned kGroup = 32;
   uint32_t indices[kGroup];
   unsigned count = 0;
-  auto flush = [&] {
+  // Inlined (as every helper here) so it runs in the caller's x86-64-v3 copy, not the baseline.
+  auto flush = [&]() __attribute__((always_inline)) {
     for (unsigned i = 0; i < count; ++i) prefetch_chunk_entry(indices[i]);
     for (unsigned i = 0; i < count; ++i) prefetch_chunk(indices[i]);
     for (unsigned i = 0; i < count; ++i) {

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "codec/mh_format.hpp"
+#include "codec/skip_cell_parts.hpp"
 #include "common/byte_order.hpp"
 
 namespace shadowtiles {
@@ -349,19 +350,12 @@ uint32_t MhTileView::pcf_count_impl(uint32_t u0, uint32_t v0, uint32_t kw, uint3
   const unsigned L = levels_;
   const unsigned lca = L - unsigned(std::bit_width((u0 ^ u1) | (v0 ^ v1)));
   if (skip_level_ != 0 && lca < skip_level_) {
-    // The box crosses skip list cells (a 3x3 kernel does in ~4 of 10 places at level 8): each part
-    // starts from its own entry. From the common ancestor, above the list, every step to the
-    // list's level would be a miss: in preorder the upper levels' blocks lie far apart.
-    const unsigned shift = L - skip_level_;
-    uint32_t lit = 0;
-    for (uint32_t cv = v0 >> shift; cv <= v1 >> shift; ++cv) {
-      const uint32_t pv0 = std::max(v0, cv << shift), pv1 = std::min(v1, ((cv + 1) << shift) - 1);
-      for (uint32_t cu = u0 >> shift; cu <= u1 >> shift; ++cu) {
-        const uint32_t pu0 = std::max(u0, cu << shift), pu1 = std::min(u1, ((cu + 1) << shift) - 1);
-        lit += pcf_count_impl<W>(pu0, pv0, pu1 - pu0 + 1, pv1 - pv0 + 1, depth, bias);
-      }
-    }
-    return lit;
+    // Across skip list cells: each part from its own entry (codec/skip_cell_parts.hpp); in preorder
+    // the upper levels' blocks lie far apart, so every step down to the list's level would miss.
+    return sum_over_skip_cell_parts(u0, v0, u1, v1, L - skip_level_,
+                                    [&](uint32_t pu0, uint32_t pv0, uint32_t pu1, uint32_t pv1) {
+                                      return pcf_count_impl<W>(pu0, pv0, pu1 - pu0 + 1, pv1 - pv0 + 1, depth, bias);
+                                    });
   }
   unsigned level;
   WalkState s = start_state(u0, v0, lca, &level);
