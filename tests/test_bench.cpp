@@ -115,6 +115,12 @@ TEST(Bench, TinyRunWritesSaneFigures) {
     EXPECT_GT(row["cold_batch_bytes_read"].get<uint64_t>(), 0u) << what;
     EXPECT_EQ(row["cold_http_stream_bytes"].get<uint64_t>(), row["cold_batch_bytes_read"].get<uint64_t>()) << what;
     EXPECT_EQ(row["cold_http_post_bytes_read"].get<uint64_t>(), row["cold_batch_bytes_read"].get<uint64_t>()) << what;
+    // Then the warm HTTP batch (issue 15's 100k-point POSTs): a rate per POST, the best no lower than the median.
+    ASSERT_TRUE(row.contains("http_batch_lps_median")) << what;
+    EXPECT_GT(row["http_batch_points"].get<uint64_t>(), 0u) << what;
+    EXPECT_LE(row["http_batch_points"].get<uint64_t>(), 100000u) << what;
+    EXPECT_GT(row["http_batch_lps_median"].get<double>(), 0) << what;
+    EXPECT_GE(row["http_batch_lps_best"].get<double>(), row["http_batch_lps_median"].get<double>()) << what;
     const std::string method = row["method"];
     if (std::find(std::begin(kLossless), std::end(kLossless), method) == std::end(kLossless)) continue;
     const auto& ref = raw[row["scene"]];

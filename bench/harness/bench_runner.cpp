@@ -264,6 +264,9 @@ Status measure_store(const BenchConfig& config, const SceneSpec& spec, uint32_t 
         row["cold_http_post_bytes_read"] = http->post_bytes_read;
         row["cold_http_stream_s"] = http->stream_seconds;
         row["cold_http_stream_bytes"] = http->stream_bytes_fetched;
+        row["http_batch_points"] = http->warm_batch_points;
+        row["http_batch_lps_median"] = http->warm_post_lps_median;
+        row["http_batch_lps_best"] = http->warm_post_lps_best;
       }
       std::vector<TileCoord> all;
       for (uint32_t y = 0; y < (*cold)->layout().tiles_per_side(); ++y)
