@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "builder/entry_cover.hpp"
+#include "builder/entry_depth_gap.hpp"
 #include "builder/receiver_surface_caps.hpp"
 #include "builder/tile_geometry.hpp"
 #include "builder/ground_truth.hpp"
@@ -297,6 +298,12 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
       entry_row(v);
       local.entry_seconds += seconds_since(entry_start);
     }
+  }
+  if (entry_rule) {  // the depth-gap bound, for the texels no cover lowered
+    const auto entry_start = Clock::now();
+    lower_entry_bounds_by_depth_gaps(geometry, tile, size, intervals.texels, intervals.entry_lower,
+                                     options_.exit_margin, options_.entry_slack, options_.entry_tolerance);
+    local.entry_seconds += seconds_since(entry_start);
   }
   (void)closed_id;
   local.ray_seconds = seconds_since(ray_start) - local.entry_seconds;

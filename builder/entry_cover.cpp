@@ -13,15 +13,6 @@ namespace {
 
 constexpr double kEntrySquareHalf = 0.51;
 
-// min(lower, deepest + tolerance - slack), rounded up to a float and one float step more: never
-// below the exact bound, nor below verify's reference (builder/reference_entry_bounds.hpp), which
-// evaluates the same planes another way.
-float entry_bound(double deepest, float lower, float slack, float tolerance) {
-  const double entry = deepest + double(tolerance) - double(slack);
-  if (entry >= double(lower)) return lower;
-  return std::clamp(next_float_up(float_at_least(entry)), 0.0f, lower);
-}
-
 // The entry rule (DualDepthOptions::entry_slack). `first_prim` is the centre ray's first-hit triangle
 // (in the open set when `open`), (cu, cv) the texel centre in tile-local texels, (global_u, global_v)
 // in the map's. The rule needs triangles whose footprints cover the texel's whole square S: then the
@@ -90,6 +81,12 @@ float entry_lower(const TileGeometry& geometry, bool open, uint32_t first_prim,
 }
 
 }  // namespace
+
+float entry_bound(double deepest, float lower, float slack, float tolerance) {
+  const double entry = deepest + double(tolerance) - double(slack);
+  if (entry >= double(lower)) return lower;
+  return std::clamp(next_float_up(float_at_least(entry)), 0.0f, lower);
+}
 
 // The entry pass over a tile, in the common cases first: a square inside its first-hit triangle, or
 // inside it and the triangle across the one edge that crosses it (the cover entry_lower would grow).

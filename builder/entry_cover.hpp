@@ -13,6 +13,11 @@
 
 namespace shadowtiles {
 
+// min(lower, deepest + tolerance - slack), rounded up to a float and one float step more: never
+// below the exact bound, nor below verify's reference (builder/reference_entry_bounds.hpp), which
+// evaluates the same planes another way. `lower` when that is not smaller.
+float entry_bound(double deepest, float lower, float slack, float tolerance);
+
 class EntryCover {
  public:
   // `slack`, `tolerance`: DualDepthOptions::entry_slack and entry_tolerance (normalised depth).

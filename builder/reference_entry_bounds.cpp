@@ -54,7 +54,7 @@ Polygon clip(const Polygon& polygon, const Point2& a, const Point2& b, bool left
 struct Footprint {
   std::array<Point2, 3> corner;
   std::array<double, 3> depth;
-  double area2;  // twice the signed area (positive: counter-clockwise)
+  double area2;  // twice the signed area (positive: counter-clockwise); 0: edge-on
 
   double depth_at(const Point2& p) const {
     const double wa = cross(corner[1], corner[2], p) / area2;
@@ -96,16 +96,30 @@ void subtract_from(std::vector<Polygon>& remainder, const Footprint& t, std::vec
 // area) and the part's area.
 struct OverSquare {
   double deepest = -std::numeric_limits<double>::infinity();
+  double shallowest = std::numeric_limits<double>::infinity();
   double area = 0;
 };
 OverSquare over_square(const Footprint& t, const Polygon& square) {
+  OverSquare over;
+  if (t.area2 == 0) {  // edge-on: no area; where its footprint's box meets the square, its vertices' range
+    const double u_lo = std::min({t.corner[0].u, t.corner[1].u, t.corner[2].u});
+    const double u_hi = std::max({t.corner[0].u, t.corner[1].u, t.corner[2].u});
+    const double v_lo = std::min({t.corner[0].v, t.corner[1].v, t.corner[2].v});
+    const double v_hi = std::max({t.corner[0].v, t.corner[1].v, t.corner[2].v});
+    if (u_hi < square[0].u || u_lo >= square[2].u || v_hi < square[0].v || v_lo >= square[2].v) return over;
+    over.deepest = std::max({t.depth[0], t.depth[1], t.depth[2]});
+    over.shallowest = std::min({t.depth[0], t.depth[1], t.depth[2]});
+    return over;
+  }
   Polygon part = square;
   for (int k = 0; k < 3 && part.size() >= 3; ++k) part = clip(part, t.corner[size_t(k)], t.corner[size_t((k + 1) % 3)], true);
-  OverSquare over;
   if (part.size() < 3) return over;
   over.area = area(part);
   if (over.area <= 0) return over;
-  for (const Point2& p : part) over.deepest = std::max(over.deepest, t.depth_at(p));
+  for (const Point2& p : part) {
+    over.deepest = std::max(over.deepest, t.depth_at(p));
+    over.shallowest = std::min(over.shallowest, t.depth_at(p));
+  }
   return over;
 }
 
@@ -133,12 +147,12 @@ bool covers(std::vector<Candidate>& chosen, const std::vector<Footprint>& footpr
 }  // namespace
 
 std::vector<float> reference_entry_bounds(const LightSpaceScene& scene, TileCoord tile, const TileIntervals& first_hits,
-                                          double slack, double tolerance) {
+                                          double slack, double tolerance, double gap) {
   const uint32_t size = first_hits.size;
   const double u0 = double(tile.x) * scene.layout().tile_size(), v0 = double(tile.y) * scene.layout().tile_size();
   const Scene& world = scene.scene();
-  // Footprints (edge-on triangles cover nothing), and bins of 16x16 texels listing the footprints whose
-  // bounding box meets them.
+  // Footprints (edge-on ones cover nothing, but count for the depth gap), and bins of 16x16 texels
+  // listing the footprints whose bounding box meets them.
   std::vector<Footprint> footprints;
   for (uint32_t t : scene.triangles_of(tile)) {
     Footprint f;
@@ -148,7 +162,6 @@ std::vector<float> reference_entry_bounds(const LightSpaceScene& scene, TileCoor
       f.depth[size_t(k)] = p.depth;
     }
     f.area2 = cross(f.corner[0], f.corner[1], f.corner[2]);
-    if (f.area2 == 0) continue;
     if (f.area2 < 0) {
       std::swap(f.corner[1], f.corner[2]);
       std::swap(f.depth[1], f.depth[2]);
@@ -186,9 +199,12 @@ std::vector<float> reference_entry_bounds(const LightSpaceScene& scene, TileCoor
       if (first >= 1.0f) continue;
       const Polygon square{{double(u), double(v)}, {u + 1.0, double(v)}, {u + 1.0, v + 1.0}, {double(u), v + 1.0}};
       candidates.clear();
+      // The depth gap: the deepest of the triangles that come within `gap` of the first hit.
+      double gap_depth = -std::numeric_limits<double>::infinity();
       for (uint32_t f : binned[size_t(v / kBin) * bins + u / kBin]) {
         const OverSquare over = over_square(footprints[f], square);
-        if (over.deepest > -std::numeric_limits<double>::infinity()) candidates.push_back({over.deepest, over.area, f});
+        if (over.shallowest <= double(first) + gap) gap_depth = std::max(gap_depth, over.deepest);
+        if (over.area > 0) candidates.push_back({over.deepest, over.area, f});
       }
       std::sort(candidates.begin(), candidates.end(),
                 [](const Candidate& a, const Candidate& b) { return a.deepest < b.deepest; });
@@ -225,8 +241,11 @@ std::vector<float> reference_entry_bounds(const LightSpaceScene& scene, TileCoor
         }
         cover_depth = candidates[hi - 1].deepest;
       }
-      if (cover_depth == std::numeric_limits<double>::infinity()) continue;
-      const double entry = cover_depth + tolerance - slack;
+      const double depth = std::min(cover_depth, gap_depth > -std::numeric_limits<double>::infinity()
+                                                     ? gap_depth
+                                                     : std::numeric_limits<double>::infinity());
+      if (depth == std::numeric_limits<double>::infinity()) continue;
+      const double entry = depth + tolerance - slack;
       if (entry >= double(first)) continue;
       bounds[i] = std::max(0.0f, float_at_least(entry));
     }

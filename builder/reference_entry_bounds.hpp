@@ -9,6 +9,10 @@
 // set and its depths are no smaller, so the reference is at most the renderer's bound (up to rounding)
 // and a value the build stores is never below it. Patches (nearly closed meshes' holes) are not
 // surfaces and cover nothing; edge-on triangles neither.
+// The depth-gap bound beside it (builder/entry_depth_gap.hpp): G = the largest depth over the square
+// of every triangle (edge-on ones too, by their vertices) whose part of the square comes within `gap`
+// of the first hit, clipped exactly here where the renderer bounds planes over the whole square; the
+// texel's bound is min(first hit, min(B, G) + tolerance - slack).
 // Thread safety: pure function.
 #pragma once
 
@@ -20,9 +24,9 @@
 namespace shadowtiles {
 
 // `first_hits`: the tile's texel-centre intervals (DualDepthRenderer::render_centre; lower = the
-// first hit). `slack`, `tolerance`: DualDepthOptions::entry_slack and entry_tolerance. Returns one
-// bound per texel, row-major; a miss keeps its lower (1).
+// first hit). `slack`, `tolerance`: DualDepthOptions::entry_slack and entry_tolerance; `gap`: the
+// exit margin (normalised depth). Returns one bound per texel, row-major; a miss keeps its lower (1).
 std::vector<float> reference_entry_bounds(const LightSpaceScene& scene, TileCoord tile, const TileIntervals& first_hits,
-                                          double slack, double tolerance);
+                                          double slack, double tolerance, double gap);
 
 }  // namespace shadowtiles

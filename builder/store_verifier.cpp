@@ -145,7 +145,7 @@ Result<VerifyReport> verify_store(const ShadowMap& map, const Scene& scene, cons
       if (entry_slack > 0) {
         entry_applied = *intervals;
         entry_applied->entry_lower =
-            reference_entry_bounds(light_scene, tiles[i], *intervals, entry_slack, entry_tolerance);
+            reference_entry_bounds(light_scene, tiles[i], *intervals, entry_slack, entry_tolerance, options.exit_margin);
         apply_entry_rule(*entry_applied);
       }
       std::map<store::Method, MethodVerification> local;

@@ -5,8 +5,10 @@
 //   texels (where the first-hit triangle does not cover the square, so the bound must stay);
 // - texels inside one triangle, or inside two coplanar triangles across their shared edge, get
 //   exactly the plane's deepest corner + tolerance - slack;
-// - texels crossed by an outline edge (no triangle across it: the step) keep the first hit; the first hit itself stays in `lower`
-//   until apply_entry_rule (raw is encoded from it);
+// - texels crossed by an outline edge (no triangle across it: the step) get the depth gap's bound:
+//   the deepest point over the square of the surfaces within the exit margin of the first hit (both
+//   sides of the step); the first hit itself stays in `lower` until apply_entry_rule (raw is encoded
+//   from it);
 // - on a real open scene (fzk_haus, 512^2), receivers sampled by area that Embree's ground truth
 //   lights and raw lights stay lit.
 #include <gtest/gtest.h>
@@ -15,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include "builder/dual_depth_renderer.hpp"
 #include "builder/embree_device.hpp"
@@ -67,7 +70,7 @@ Scene step_scene() {
 
 struct Rendered {
   LightFrame frame;
-  double slack = 0, tolerance = 0;  // normalised depth
+  double slack = 0, tolerance = 0, gap = 0;  // normalised depth (gap: the exit margin)
   TileIntervals intervals;          // render(): first hits in lower, the rule's bounds beside
 };
 
@@ -90,7 +93,7 @@ Rendered render(const Scene& scene) {
   DualDepthRenderer renderer(*device, light_scene, options);
   auto intervals = renderer.render({0, 0});
   EXPECT_TRUE(intervals.ok());
-  return {*frame, slack, options.entry_tolerance, std::move(*intervals)};
+  return {*frame, slack, options.entry_tolerance, options.exit_margin, std::move(*intervals)};
 }
 
 TEST(EntryRule, EveryLitReceiverRawLightsStaysLit) {
@@ -158,8 +161,16 @@ TEST(EntryRule, InsideATriangleTheBoundIsItsDeepestCornerLessTheSlack) {
         return crosses(0, kStepX) || crosses(kStepX, 10);
       };
       if (crosses_outline(0)) {
+        // No triangle across the step's edge covers the rest of the square, so the depth gap bounds
+        // it: both quads come within the exit margin of the first hit there, and the deepest point
+        // either has over the square is the lower quad's at the step (its plane clamped to its
+        // vertices' range, which starts there; the reference clips to the same point).
         ++on_edges;
-        EXPECT_EQ(entry, first.lower) << u << "," << v;  // no triangle across that edge covers the rest
+        const double deepest = r.frame.to_light({kStepX, std::min(lo[1], hi[1]), upper_z(kStepX) - kStep}).depth;
+        const double expected = deepest + r.tolerance - r.slack;
+        EXPECT_LT(entry, first.lower) << u << "," << v;
+        EXPECT_NEAR(entry, expected, 4e-7) << u << "," << v;
+        EXPECT_GE(double(entry), expected - 1e-7) << u << "," << v;
         continue;
       }
       if (crosses_outline(0.02)) continue;  // within the renderer's rounding margin (a hundredth of a texel)
@@ -181,31 +192,67 @@ TEST(EntryRule, InsideATriangleTheBoundIsItsDeepestCornerLessTheSlack) {
 
 // Two triangles on the two sides of a shared edge whose union is not convex at its end B: a square
 // can have every corner inside one of them while a strip of it (where its side crosses the edge's
-// line beyond B) lies in neither, and the floor shows through there. Neither the renderer nor
-// verify's reference may lower that texel; a square inside one triangle, and one straddling the
-// edge away from B, are lowered by both.
-TEST(EntryRule, ASquareOverTheGapBeyondASharedEdgeKeepsItsFirstHit) {
+// line beyond B) lies in neither, and what lies below shows through there. `below`: how much deeper
+// than the kite (in query slacks) a plate under it lies; none: only the floor, far below.
+struct KiteBounds {
+  Rendered rendered;
+  std::vector<float> reference;
+};
+KiteBounds kite_over(std::optional<double> below) {
   Scene scene = floor_under_a_lid();
   const auto frame = LightFrame::fit({0, 0, -1}, scene.bounds, kResolution);
-  ASSERT_TRUE(frame.ok());
+  EXPECT_TRUE(frame.ok());
   // In texels from the corner (32, 32), at height 2: T = (A, B, C) and N = (A, B, D) share A-B.
   const double depth = frame->to_light({5, 5, 2}).depth;
-  auto at = [&](double x, double y) { return frame->to_world({32 + x, 32 + y, depth}); };
-  scene.add_mesh("kite", {at(-30, -30), at(0.8, 0.9), at(-2, 5), at(30, 20)}, Triangles{{0, 1, 2}, {0, 3, 1}});
-  Rendered r = render(scene);
-  ASSERT_NEAR(r.frame.texel_size(), frame->texel_size(), 1e-12);  // the kite leaves the bounds as they were
-  LightSpaceScene light_scene(scene, r.frame, *TileLayout::make(kResolution, kResolution));
-  const std::vector<float> reference = reference_entry_bounds(light_scene, {0, 0}, r.intervals, r.slack, r.tolerance);
-  auto check = [&](uint32_t u, uint32_t v, bool lowered) {
-    const size_t i = size_t(v) * kResolution + u;
-    const float first = r.intervals.texels[i].lower;
-    ASSERT_LT(first, 1.0f) << u << "," << v;
-    EXPECT_EQ(r.intervals.entry_lower[i] < first, lowered) << "renderer, texel " << u << "," << v;
-    EXPECT_EQ(reference[i] < first, lowered) << "reference, texel " << u << "," << v;
-  };
-  check(32, 32, false);  // over the gap beyond B
-  check(36, 32, true);   // inside N
-  check(17, 17, true);   // across A-B, away from its ends
+  auto at = [&](double x, double y, double d) { return frame->to_world({32 + x, 32 + y, d}); };
+  scene.add_mesh("kite", {at(-30, -30, depth), at(0.8, 0.9, depth), at(-2, 5, depth), at(30, 20, depth)},
+                 Triangles{{0, 1, 2}, {0, 3, 1}});
+  if (below) {
+    const double d = depth + *below * frame->depth_from_world(2 * frame->texel_size());  // render()'s slack
+    scene.add_mesh("plate", {at(-8, -8, d), at(8, -8, d), at(-8, 8, d), at(8, 8, d)}, Triangles{{0, 1, 3}, {0, 3, 2}});
+  }
+  KiteBounds k{render(scene), {}};
+  EXPECT_NEAR(k.rendered.frame.texel_size(), frame->texel_size(), 1e-12);  // the kite leaves the bounds as they were
+  LightSpaceScene light_scene(scene, k.rendered.frame, *TileLayout::make(kResolution, kResolution));
+  const Rendered& r = k.rendered;
+  k.reference = reference_entry_bounds(light_scene, {0, 0}, r.intervals, r.slack, r.tolerance, r.gap);
+  return k;
+}
+
+void expect_lowered(const KiteBounds& k, uint32_t u, uint32_t v, bool lowered) {
+  const size_t i = size_t(v) * kResolution + u;
+  const float first = k.rendered.intervals.texels[i].lower;
+  ASSERT_LT(first, 1.0f) << u << "," << v;
+  EXPECT_EQ(k.rendered.intervals.entry_lower[i] < first, lowered) << "renderer, texel " << u << "," << v;
+  EXPECT_EQ(k.reference[i] < first, lowered) << "reference, texel " << u << "," << v;
+  EXPECT_LE(k.reference[i], k.rendered.intervals.entry_lower[i]) << "texel " << u << "," << v;
+}
+
+// A plate 1.5 slacks under the kite (within the exit margin of 2 slacks, deeper than the slack): a
+// receiver on it beyond B is lit by the truth and may be lit by raw, so neither the renderer nor
+// verify's reference may lower the texel over the gap, by a cover or by the depth gap; a square
+// inside one triangle, and one straddling the edge away from B, are covered and lowered by both.
+TEST(EntryRule, ASquareOverTheGapBeyondASharedEdgeKeepsItsFirstHit) {
+  const KiteBounds k = kite_over(1.5);
+  expect_lowered(k, 32, 32, false);  // over the gap beyond B
+  expect_lowered(k, 36, 32, true);   // inside N
+  expect_lowered(k, 17, 17, true);   // across A-B, away from its ends
+}
+
+// With only the floor under the gap (far deeper than the exit margin: no receiver there is lit by
+// raw), the depth gap lowers the texel over the gap, in the renderer and the reference alike, to the
+// kite's plane over the square; a plate half a slack under the kite (within the slack) lowers it
+// too, by less: the plate's receivers beyond B stay lit.
+TEST(EntryRule, ASquareOverADeepGapIsLoweredByTheDepthGap) {
+  const KiteBounds deep = kite_over(std::nullopt);
+  expect_lowered(deep, 32, 32, true);
+  const KiteBounds near = kite_over(0.5);
+  expect_lowered(near, 32, 32, true);
+  const size_t i = size_t(32) * kResolution + 32;
+  EXPECT_GT(near.rendered.intervals.entry_lower[i], deep.rendered.intervals.entry_lower[i]);
+  // The plate lies flat half a slack deeper: the bound is its depth less half a slack at most.
+  const Rendered& r = near.rendered;
+  EXPECT_NEAR(r.intervals.entry_lower[i], r.intervals.texels[i].lower - 0.5 * r.slack + r.tolerance, 1e-6);
 }
 
 // A square cut up by hundreds of small triangles a little shallower than a large one under them all:
@@ -236,7 +283,7 @@ TEST(EntryRule, TheReferenceFindsTheCoverOfASquareCutUpByManySmallTriangles) {
   Rendered r = render(scene);
   ASSERT_NEAR(r.frame.texel_size(), frame->texel_size(), 1e-12);  // the bounds are the floor's and lid's
   LightSpaceScene light_scene(scene, r.frame, *TileLayout::make(kResolution, kResolution));
-  const std::vector<float> reference = reference_entry_bounds(light_scene, {0, 0}, r.intervals, r.slack, r.tolerance);
+  const std::vector<float> reference = reference_entry_bounds(light_scene, {0, 0}, r.intervals, r.slack, r.tolerance, r.gap);
   const size_t i = size_t(40) * kResolution + 40;
   const float first = r.intervals.texels[i].lower;
   ASSERT_NEAR(first, depth, 1e-6);  // the centre ray hits the large triangle
@@ -283,7 +330,8 @@ RealScene real_scene() {
   auto centre = renderer.render_centre({0, 0});
   EXPECT_TRUE(rendered.ok() && centre.ok());
   r.rendered = std::move(*rendered);
-  r.reference = reference_entry_bounds(*r.light_scene, {0, 0}, *centre, options.entry_slack, options.entry_tolerance);
+  r.reference = reference_entry_bounds(*r.light_scene, {0, 0}, *centre, options.entry_slack, options.entry_tolerance,
+                                       options.exit_margin);
   return r;
 }
 
