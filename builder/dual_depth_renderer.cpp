@@ -246,12 +246,19 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
   const uint64_t tile_u0 = uint64_t(tile.x) * size, tile_v0 = uint64_t(tile.y) * size;
   // The entry rule's pass runs row by row while the row is in cache, timed apart from the rays.
   EntryCover entry_cover(geometry, tile, size, options_.entry_slack, options_.entry_tolerance);
+  std::vector<uint32_t> gap_candidates;  // texels no cover lowered that the depth gap may (row-major)
   auto entry_row = [&](uint32_t v) {
     for (uint32_t u = 0; u < size; ++u) {
       const size_t i = size_t(v) * size + u;
       const float lower = intervals.texels[i].lower;
-      if (lower < 1.0f)
-        intervals.entry_lower[i] = entry_cover.bound((first_hits[u] & kOpenFlag) != 0, first_hits[u] & ~kOpenFlag, u, v, lower);
+      if (lower >= 1.0f) continue;
+      const bool open = (first_hits[u] & kOpenFlag) != 0;
+      const uint32_t prim = first_hits[u] & ~kOpenFlag;
+      intervals.entry_lower[i] = entry_cover.bound(open, prim, u, v, lower);
+      if (intervals.entry_lower[i] >= lower &&
+          gap_may_lower((open ? geometry.open_planes : geometry.closed_planes)[prim], double(tile_u0) + u + 0.5,
+                        double(tile_v0) + v + 0.5, lower, options_.entry_slack, options_.entry_tolerance))
+        gap_candidates.push_back(uint32_t(i));
     }
   };
   for (uint32_t v = 0; v < size; ++v) {
@@ -301,7 +308,7 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
   }
   if (entry_rule) {  // the depth-gap bound, for the texels no cover lowered
     const auto entry_start = Clock::now();
-    lower_entry_bounds_by_depth_gaps(geometry, tile, size, intervals.texels, intervals.entry_lower,
+    lower_entry_bounds_by_depth_gaps(geometry, tile, size, intervals.texels, gap_candidates, intervals.entry_lower,
                                      options_.exit_margin, options_.entry_slack, options_.entry_tolerance);
     local.entry_seconds += seconds_since(entry_start);
   }

@@ -18,10 +18,17 @@
 namespace shadowtiles {
 
 // `texels`: the tile's centre-ray intervals (lower = first hit), `entry_lower` the cover pass's
-// bounds (lowered in place where the depth gap gives a smaller one). `gap`: the exit margin; `slack`,
-// `tolerance`: DualDepthOptions::entry_slack and entry_tolerance (all normalised depth).
+// bounds (lowered in place where the depth gap gives a smaller one), `candidates` the texels (row-major
+// indices, ascending) to try: those no cover lowered, whose own first-hit triangle would let them be
+// (gap_may_lower). `gap`: the exit margin; `slack`, `tolerance`: DualDepthOptions::entry_slack and
+// entry_tolerance (all normalised depth).
 void lower_entry_bounds_by_depth_gaps(const TileGeometry& geometry, TileCoord tile, uint32_t size,
-                                      std::span<const DepthInterval> texels, std::span<float> entry_lower, float gap,
-                                      float slack, float tolerance);
+                                      std::span<const DepthInterval> texels, std::span<const uint32_t> candidates,
+                                      std::span<float> entry_lower, float gap, float slack, float tolerance);
+
+// Whether the depth gap could lower texel (gu, gv) (global texel centre) with first hit `lower` on a
+// triangle with `plane`: the first-hit triangle is always in the set, so its own largest depth over
+// the square must leave room (on a slope steeper than the slack it does not, and the texel is skipped).
+bool gap_may_lower(const DepthPlane& plane, double gu, double gv, float lower, float slack, float tolerance);
 
 }  // namespace shadowtiles
