@@ -202,8 +202,11 @@ def main():
     kept = kept_rows(previous.group(0), {(scene, res_label(res), contract) for scene, res, contract in entries}) \
         if previous else None
     if kept:  # the kept rows' runs: the previous block's, less these runs (a rerun of the same files)
-        kept["sources"] = "; ".join(part for part in kept["sources"]
-                                    if not {x.strip() for x in part.split(";")[0].split(",")} <= set(args.runs))
+        # Split into units ("out/a.json, out/b.json; commit `c`, `d`"), each named once: the block's own
+        # runs and the ones it kept name the same earlier runs again.
+        units = [u for part in kept["sources"] for u in re.findall(r"out/[^;]*?; commit (?:`[^`]*`(?:, )?)+", part)]
+        kept["sources"] = "; ".join(dict.fromkeys(u.rstrip(", ") for u in units
+                                                  if not {x.strip() for x in u.split(";")[0].split(",")} <= set(args.runs)))
     block = section(list(entries.values()), args.runs + args.build_time, list(dict.fromkeys(commits)), build_time, kept)
     text = pattern.sub(lambda _: block, text) if pattern.search(text) else text.rstrip("\n") + "\n\n" + block + "\n"
     with open(args.md, "w") as f:
