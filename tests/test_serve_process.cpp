@@ -3,6 +3,8 @@
 // (also under load, in-process and by SIGHUP to the real process, never mixing two builds in one answer).
 #include <gtest/gtest.h>
 
+#include <atomic>
+
 #include "tests/server_test_support.hpp"
 
 namespace shadowtiles {
@@ -73,17 +75,31 @@ TEST(ServeCommand, ConfigFlagsAndSigtermDrain) {
   EXPECT_EQ(health->status, 200);
   // A batch in flight while SIGTERM arrives still completes (500k points take ~0.1 s to answer).
   // Its connection is opened and served first, so the batch cannot arrive after the listener closed.
+  // SIGTERM goes once the client has handed the body's last piece to the socket: the server is then
+  // reading this request (6 MB do not fit in the socket's buffers). A fixed sleep instead raced on a
+  // loaded machine: a request not yet begun on an idle keep-alive connection is closed by the drain,
+  // as HTTP allows, and the client's write failed.
   const std::string body = encode_points(std::vector<Vec3>(500000, Vec3{0, 0.1, 0}));
   httplib::Client keep("127.0.0.1", port);
   keep.set_keep_alive(true);
   ASSERT_TRUE(keep.Get("/healthz"));
+  std::atomic<bool> body_sent{false};
   std::thread batch([&] {
-    auto res = keep.Post("/v1/shadow", body, "application/octet-stream");
+    auto res = keep.Post(
+        "/v1/shadow", body.size(),
+        [&](size_t offset, size_t length, httplib::DataSink& sink) {
+          const size_t piece = std::min<size_t>(length, 64 * 1024);
+          if (!sink.write(body.data() + offset, piece)) return false;
+          if (offset + piece == body.size()) body_sent = true;
+          return true;
+        },
+        "application/octet-stream");
+    body_sent = true;  // also on failure: the main thread stops waiting
     ASSERT_TRUE(res) << httplib::to_string(res.error());
     EXPECT_EQ(res->status, 200);
     EXPECT_EQ(res->body.size(), 500000u * 4);
   });
-  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  for (int waited = 0; !body_sent && waited < 30000; ++waited) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   ASSERT_EQ(::kill(pid, SIGTERM), 0);
   batch.join();
   std::string rest;
