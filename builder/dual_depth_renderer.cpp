@@ -233,7 +233,7 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
 
   auto ray_start = Clock::now();
   // The entry rule's: the row's first-hit triangles, primitive id with the open set's flag.
-  constexpr uint32_t kOpenFlag = 1u << 31;
+  constexpr uint32_t kOpenFlag = EntryCover::kOpenFlag;
   std::vector<uint32_t> first_hits(entry_rule ? size : 0);
   std::array<std::vector<ClosedHit>, kPacket> lanes;
   CollectContext context;
@@ -248,13 +248,15 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
   EntryCover entry_cover(geometry, tile, size, options_.entry_slack, options_.entry_tolerance);
   std::vector<uint32_t> gap_candidates;  // texels no cover lowered that the depth gap may (row-major)
   auto entry_row = [&](uint32_t v) {
+    const size_t row = size_t(v) * size;
+    entry_cover.bound_row(v, first_hits, std::span(intervals.texels).subspan(row, size),
+                          std::span(intervals.entry_lower).subspan(row, size));
     for (uint32_t u = 0; u < size; ++u) {
-      const size_t i = size_t(v) * size + u;
+      const size_t i = row + u;
       const float lower = intervals.texels[i].lower;
       if (lower >= 1.0f) continue;
       const bool open = (first_hits[u] & kOpenFlag) != 0;
       const uint32_t prim = first_hits[u] & ~kOpenFlag;
-      intervals.entry_lower[i] = entry_cover.bound(open, prim, u, v, lower);
       if (intervals.entry_lower[i] >= lower &&
           gap_may_lower((open ? geometry.open_planes : geometry.closed_planes)[prim], double(tile_u0) + u + 0.5,
                         double(tile_v0) + v + 0.5, lower, options_.entry_slack, options_.entry_tolerance))

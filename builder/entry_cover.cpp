@@ -29,7 +29,7 @@ constexpr double kEntrySquareHalf = 0.51;
 // a vertex in S the triangles form a closed, unfolded fan), and S, connected and holding the centre,
 // lies inside it. docs/receiver-contracts.md, "The entry rule", has the argument.
 constexpr int kMaxCoverTriangles = 24;  // more: lower stays the first hit (a bounded cost per texel)
-float entry_lower(const TileGeometry& geometry, bool open, uint32_t first_prim,
+float entry_lower_by_search(const TileGeometry& geometry, bool open, uint32_t first_prim,
                   double cu, double cv, double global_u, double global_v, float lower, float slack, float tolerance) {
   const auto& planes = open ? geometry.open_planes : geometry.closed_planes;
   const auto& vertices = open ? geometry.open_vertices : geometry.closed_vertices;
@@ -94,7 +94,7 @@ float entry_bound(double deepest, float lower, float slack, float tolerance) {
 // coordinates, and for each edge the triangle across it (when it lies on the other side, not folded)
 // with that triangle's two other edge lines and plane. A square lies inside an edge's half-plane when
 // the line's value at its centre exceeds the grown square's half-extent along the line's normal.
-// Anything else goes to entry_lower's search.
+// Anything else goes to entry_lower_by_search.
 class EntryCover::Fast {
  public:
   Fast(const TileGeometry& geometry, double tile_u0, double tile_v0)
@@ -103,30 +103,61 @@ class EntryCover::Fast {
   // The largest depth over the square centred at global (gu, gv) of the cover found, for a first hit
   // `key` (prim | open flag); NaN when neither common case applies.
   double deepest(uint32_t key, bool open, uint32_t prim, double gu, double gv) {
+    double out;
+    deepest_run(key, open, prim, gu, 1, gv, &out);
+    return out;
+  }
+
+  // deepest() of `count` squares of one row that share a first hit, centred at (gu_first + i, gv):
+  // the lines' and planes' v terms once per run, each texel's arithmetic otherwise the same.
+  void deepest_run(uint32_t key, bool open, uint32_t prim, double gu_first, uint32_t count, double gv, double* out) {
     const double none = std::numeric_limits<double>::quiet_NaN();
     if (key != key_) prepare(open, prim, key);
-    if (!triangle_.usable) return none;
-    int crossed = -1;
-    for (int k = 0; k < 3; ++k) {
-      if (triangle_.edge[k].holds(gu, gv)) continue;
-      if (crossed >= 0) return none;
-      crossed = k;
+    if (!triangle_.usable) {
+      std::fill(out, out + count, none);
+      return;
     }
-    const double own = triangle_.plane.deepest(gu, gv);
-    if (crossed < 0) return own;
-    const Across& across = across_[crossed];
-    if (!across.usable || !across.edge[0].holds(gu, gv) || !across.edge[1].holds(gu, gv)) return none;
-    return std::max(own, across.plane.deepest(gu, gv));
+    const RowLine edge[3] = {triangle_.edge[0].at_row(gv), triangle_.edge[1].at_row(gv), triangle_.edge[2].at_row(gv)};
+    const RowPlane own_plane = triangle_.plane.at_row(gv);
+    for (uint32_t i = 0; i < count; ++i) {
+      const double gu = gu_first + i;
+      const bool inside0 = edge[0].holds(gu), inside1 = edge[1].holds(gu), inside2 = edge[2].holds(gu);
+      const double own = own_plane.deepest(gu);
+      if (inside0 && inside1 && inside2) {  // the common case: the square inside its triangle
+        out[i] = own;
+        continue;
+      }
+      if (int(inside0) + int(inside1) + int(inside2) != 2) {
+        out[i] = none;
+        continue;
+      }
+      const Across& across = across_[inside0 ? (inside1 ? 2 : 1) : 0];
+      if (!across.usable) {
+        out[i] = none;
+        continue;
+      }
+      const RowLine a0 = across.edge[0].at_row(gv), a1 = across.edge[1].at_row(gv);
+      out[i] = a0.holds(gu) && a1.holds(gu) ? std::max(own, across.plane.at_row(gv).deepest(gu)) : none;
+    }
   }
 
  private:
+  // A line and a plane on one row gv: b gv (dv gv) computed once, then the same sums as a gu + b gv + c.
+  struct RowLine {
+    double a, bv, c, margin;
+    bool holds(double gu) const { return a * gu + bv + c > margin; }
+  };
+  struct RowPlane {
+    double du, dvv, c, highest;
+    double deepest(double gu) const { return std::min(du * gu + dvv + c, highest); }
+  };
   struct Line {  // a (gu) + b (gv) + c, positive inside
     double a = 0, b = 0, c = 0, margin = 0;
-    bool holds(double gu, double gv) const { return a * gu + b * gv + c > margin; }
+    RowLine at_row(double gv) const { return {a, b * gv, c, margin}; }
   };
   struct Plane {  // the plane's largest depth over the square centred at (gu, gv), at most its deepest vertex
     double du = 0, dv = 0, c = 0, highest = 0;
-    double deepest(double gu, double gv) const { return std::min(du * gu + dv * gv + c, highest); }
+    RowPlane at_row(double gv) const { return {du, dv * gv, c, highest}; }
   };
   struct Triangle {
     bool usable = false;
@@ -201,12 +232,40 @@ EntryCover::EntryCover(const TileGeometry& geometry, TileCoord tile, uint32_t ti
 
 EntryCover::~EntryCover() = default;
 
+void EntryCover::bound_row(uint32_t v, std::span<const uint32_t> first_hits, std::span<const DepthInterval> row,
+                           std::span<float> entry_lower) {
+  const double gv = tile_v0_ + v + 0.5;
+  const uint32_t size = uint32_t(row.size());
+  run_deepest_.resize(size);
+  for (uint32_t u = 0; u < size;) {
+    if (row[u].lower >= 1.0f) {
+      ++u;
+      continue;
+    }
+    const uint32_t key = first_hits[u];
+    uint32_t end = u + 1;
+    while (end < size && row[end].lower < 1.0f && first_hits[end] == key) ++end;
+    const bool open = (key & kOpenFlag) != 0;
+    const uint32_t prim = key & ~kOpenFlag;
+    fast_->deepest_run(key, open, prim, tile_u0_ + u + 0.5, end - u, gv, run_deepest_.data());
+    for (uint32_t w = u; w < end; ++w) {
+      const double deepest = run_deepest_[w - u];
+      const float lower = row[w].lower;
+      entry_lower[w] = deepest == deepest
+                           ? entry_bound(deepest, lower, slack_, tolerance_)
+                           : entry_lower_by_search(geometry_, open, prim, w + 0.5, v + 0.5, tile_u0_ + w + 0.5, gv,
+                                                   lower, slack_, tolerance_);
+    }
+    u = end;
+  }
+}
+
 float EntryCover::bound(bool open, uint32_t prim, uint32_t u, uint32_t v, float lower) {
   const double gu = tile_u0_ + u + 0.5, gv = tile_v0_ + v + 0.5;
   const uint32_t key = prim | (open ? 1u << 31 : 0u);
   const double deepest = fast_->deepest(key, open, prim, gu, gv);
   if (deepest == deepest) return entry_bound(deepest, lower, slack_, tolerance_);
-  return entry_lower(geometry_, open, prim, u + 0.5, v + 0.5, gu, gv, lower, slack_, tolerance_);
+  return entry_lower_by_search(geometry_, open, prim, u + 0.5, v + 0.5, gu, gv, lower, slack_, tolerance_);
 }
 
 }  // namespace shadowtiles

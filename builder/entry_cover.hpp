@@ -7,7 +7,10 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
+#include <vector>
 
+#include "builder/depth_interval.hpp"
 #include "builder/light_space_scene.hpp"
 #include "builder/tile_geometry.hpp"
 
@@ -27,6 +30,15 @@ class EntryCover {
   EntryCover(const EntryCover&) = delete;
   EntryCover& operator=(const EntryCover&) = delete;
 
+  // A first hit as the renderer records it per texel: the triangle, with this flag when it is in the
+  // open set.
+  static constexpr uint32_t kOpenFlag = 1u << 31;
+
+  // bound() of every hit texel (lower < 1) of tile row v into entry_lower (the others untouched),
+  // a run of texels with one first hit at a time; `first_hits[u]`: prim | kOpenFlag when open.
+  void bound_row(uint32_t v, std::span<const uint32_t> first_hits, std::span<const DepthInterval> row,
+                 std::span<float> entry_lower);
+
   // The bound of texel (u, v) (tile-local) whose centre ray first hit triangle `prim` (of the open
   // set when `open`) at depth `lower` (< 1); `lower` itself when no cover is found.
   float bound(bool open, uint32_t prim, uint32_t u, uint32_t v, float lower);
@@ -37,6 +49,7 @@ class EntryCover {
   double tile_u0_, tile_v0_;
   float slack_, tolerance_;
   std::unique_ptr<Fast> fast_;
+  std::vector<double> run_deepest_;  // bound_row's per-run scratch
 };
 
 }  // namespace shadowtiles
