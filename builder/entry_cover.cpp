@@ -90,11 +90,11 @@ float entry_bound(double deepest, float lower, float slack, float tolerance) {
 
 // The entry pass over a tile, in the common cases first: a square inside its first-hit triangle, or
 // inside it and the triangle across the one edge that crosses it (the cover entry_lower would grow).
-// Per triangle, once for a run of texels that hit it: its edge lines and plane in global texel
-// coordinates, and for each edge the triangle across it (when it lies on the other side, not folded)
-// with that triangle's two other edge lines and plane. A square lies inside an edge's half-plane when
-// the line's value at its centre exceeds the grown square's half-extent along the line's normal.
-// Anything else goes to entry_lower_by_search.
+// Per triangle, on the first texel that hits it: its edge lines and plane in global texel
+// coordinates, and, when a square first crosses an edge, the triangle across it (when it lies on the
+// other side, not folded) with that triangle's two other edge lines and plane. A square lies inside
+// an edge's half-plane when the line's value at its centre exceeds the grown square's half-extent
+// along the line's normal. Anything else goes to entry_lower_by_search.
 class EntryCover::Fast {
  public:
   Fast(const TileGeometry& geometry, double tile_u0, double tile_v0)
@@ -112,13 +112,14 @@ class EntryCover::Fast {
   // the lines' and planes' v terms once per run, each texel's arithmetic otherwise the same.
   void deepest_run(uint32_t key, bool open, uint32_t prim, double gu_first, uint32_t count, double gv, double* out) {
     const double none = std::numeric_limits<double>::quiet_NaN();
-    if (key != key_) prepare(open, prim, key);
-    if (!triangle_.usable) {
+    Entry& entry = entry_for(key, open, prim);
+    if (!entry.triangle.usable) {
       std::fill(out, out + count, none);
       return;
     }
-    const RowLine edge[3] = {triangle_.edge[0].at_row(gv), triangle_.edge[1].at_row(gv), triangle_.edge[2].at_row(gv)};
-    const RowPlane own_plane = triangle_.plane.at_row(gv);
+    const Triangle& triangle = entry.triangle;
+    const RowLine edge[3] = {triangle.edge[0].at_row(gv), triangle.edge[1].at_row(gv), triangle.edge[2].at_row(gv)};
+    const RowPlane own_plane = triangle.plane.at_row(gv);
     for (uint32_t i = 0; i < count; ++i) {
       const double gu = gu_first + i;
       const bool inside0 = edge[0].holds(gu), inside1 = edge[1].holds(gu), inside2 = edge[2].holds(gu);
@@ -131,7 +132,7 @@ class EntryCover::Fast {
         out[i] = none;
         continue;
       }
-      const Across& across = across_[inside0 ? (inside1 ? 2 : 1) : 0];
+      const Across& across = across_of(entry, inside0 ? (inside1 ? 2 : 1) : 0, open, prim);
       if (!across.usable) {
         out[i] = none;
         continue;
@@ -190,34 +191,49 @@ class EntryCover::Fast {
     return area > 0 ? 1.0 : -1.0;
   }
 
-  void prepare(bool open, uint32_t prim, uint32_t key) {
-    key_ = key;
+  // A first hit's triangle, and the triangles across its edges, prepared on first use. A row
+  // alternates between a few triangles (the two halves of a terrain quad), so a few are kept.
+  struct Entry {
+    uint32_t key = std::numeric_limits<uint32_t>::max();
+    uint8_t across_ready = 0;  // bit k: across[k] is set
+    Triangle triangle;
+    Across across[3];
+  };
+  static constexpr unsigned kEntries = 8;
+
+  Entry& entry_for(uint32_t key, bool open, uint32_t prim) {
+    Entry& entry = entries_[(key * 0x9E3779B1u) >> 29];
+    if (entry.key == key) return entry;
+    entry.key = key;
+    entry.across_ready = 0;
     const float* t;
     const double own = orientation(open, prim, &t);
-    triangle_.usable = own != 0;
-    if (!triangle_.usable) return;
+    entry.triangle.usable = own != 0;
+    if (!entry.triangle.usable) return entry;
     const auto& planes = open ? geometry_.open_planes : geometry_.closed_planes;
-    const auto& neighbours = open ? geometry_.open_neighbours : geometry_.closed_neighbours;
-    for (int k = 0; k < 3; ++k) triangle_.edge[k] = line(t, k, own);
-    triangle_.plane = plane_of(planes[prim]);
-    for (int k = 0; k < 3; ++k) {
-      Across& across = across_[k];
-      const EdgeNeighbour n = neighbours[prim][size_t(k)];
-      const float* o;
-      const double theirs = n.prim < 0 ? 0 : orientation(open, uint32_t(n.prim), &o);
-      across.usable = theirs != 0 && n.crossable;
-      if (!across.usable) continue;
-      across.edge[0] = line(o, (n.edge + 1) % 3, theirs);
-      across.edge[1] = line(o, (n.edge + 2) % 3, theirs);
-      across.plane = plane_of(planes[size_t(n.prim)]);
-    }
+    for (int k = 0; k < 3; ++k) entry.triangle.edge[k] = line(t, k, own);
+    entry.triangle.plane = plane_of(planes[prim]);
+    return entry;
+  }
+
+  const Across& across_of(Entry& entry, int k, bool open, uint32_t prim) {
+    Across& across = entry.across[k];
+    if (entry.across_ready & (1u << k)) return across;
+    entry.across_ready |= uint8_t(1u << k);
+    const EdgeNeighbour n = (open ? geometry_.open_neighbours : geometry_.closed_neighbours)[prim][size_t(k)];
+    const float* o;
+    const double theirs = n.prim < 0 ? 0 : orientation(open, uint32_t(n.prim), &o);
+    across.usable = theirs != 0 && n.crossable;
+    if (!across.usable) return across;
+    across.edge[0] = line(o, (n.edge + 1) % 3, theirs);
+    across.edge[1] = line(o, (n.edge + 2) % 3, theirs);
+    across.plane = plane_of((open ? geometry_.open_planes : geometry_.closed_planes)[size_t(n.prim)]);
+    return across;
   }
 
   const TileGeometry& geometry_;
   double tile_u0_, tile_v0_;
-  uint32_t key_ = std::numeric_limits<uint32_t>::max();
-  Triangle triangle_;
-  Across across_[3];
+  Entry entries_[kEntries];
 };
 
 
