@@ -3,6 +3,7 @@
 // answer as the exact entry depth (docs/architecture.md §4). Misses are [1, +inf): fully lit.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -35,5 +36,16 @@ struct TileIntervals {
     return true;
   }
 };
+
+// lower = min(lower, entry_lower) per texel, then entry_lower is emptied (nothing to do when empty).
+// After it, lower is no longer the first hit: raw and the other first-hit methods are encoded from
+// the intervals before, the interval methods (MH, MMH, DAG-MH, CPVS) after (build_mh takes the min
+// itself as it reads an unapplied tile).
+inline void apply_entry_rule(TileIntervals& intervals) {
+  if (intervals.entry_lower.empty()) return;
+  for (size_t i = 0; i < intervals.texels.size(); ++i)
+    intervals.texels[i].lower = std::min(intervals.texels[i].lower, intervals.entry_lower[i]);
+  intervals.entry_lower.clear();
+}
 
 }  // namespace shadowtiles

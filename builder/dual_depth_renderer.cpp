@@ -362,11 +362,4 @@ double entry_tolerance_depth(const LightFrame& frame, const WorldBounds& bounds)
   return frame.depth_from_world(ground_truth_offset(bounds)) + second_layer::kSameSurface;
 }
 
-void apply_entry_rule(TileIntervals& intervals) {
-  if (intervals.entry_lower.empty()) return;
-  for (size_t i = 0; i < intervals.texels.size(); ++i)
-    intervals.texels[i].lower = std::min(intervals.texels[i].lower, intervals.entry_lower[i]);
-  intervals.entry_lower.clear();
-}
-
 }  // namespace shadowtiles

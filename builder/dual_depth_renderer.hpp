@@ -116,9 +116,6 @@ void apply_exit_caps(TileIntervals& intervals, std::span<const float> caps, floa
 // DualDepthOptions::entry_tolerance for a map `frame` of a scene with `bounds`: the ground truth's
 // ray offset (builder/ground_truth.hpp) in normalised depth, plus the same-surface tolerance.
 double entry_tolerance_depth(const LightFrame& frame, const WorldBounds& bounds);
-// lower = min(lower, entry_lower) per texel, then entry_lower is emptied (nothing to do when empty).
-// After it, lower is no longer the first hit: raw and the other first-hit methods are encoded from
-// the intervals before, the interval methods (MH, MMH, DAG-MH) from a copy after.
-void apply_entry_rule(TileIntervals& intervals);
+// apply_entry_rule: builder/depth_interval.hpp.
 
 }  // namespace shadowtiles

@@ -123,7 +123,8 @@ Result<const MhHierarchy*> TileEncodeInput::mh() {
   if (!mh_) {
     MhBuildOptions build_options;
     build_options.construction = options_.construction;
-    auto built = build_mh(interval_method_intervals(), build_options);
+    // The renderer's intervals: build_mh applies their entry-rule bounds as it reads them.
+    auto built = build_mh(intervals_, build_options);
     if (!built) return built.error();
     mh_ = std::move(*built);
   }

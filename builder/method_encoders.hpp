@@ -31,8 +31,8 @@ class TileEncodeInput {
       : intervals_(intervals), options_(options) {}
   // The rendered intervals: lower is the first hit (raw and SST store it).
   const TileIntervals& intervals() const { return intervals_; }
-  // The intervals the interval methods (MH family, CPVS) encode: with the entry rule's bounds applied
-  // when the renderer made them (a copy, made once), else intervals().
+  // The intervals CPVS encodes: with the entry rule's bounds applied when the renderer made them (a
+  // copy, made once), else intervals(). The MH family needs no copy: build_mh applies the bounds.
   const TileIntervals& interval_method_intervals();
   const TileEncodeOptions& options() const { return options_; }
   // Errors: those of build_mh.

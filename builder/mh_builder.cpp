@@ -16,6 +16,11 @@ Status check_tile_intervals(const TileIntervals& tile) {
   if (tile.size == 0 || tile.size > 16384 || !std::has_single_bit(tile.size))
     return fail("tile size " + std::to_string(tile.size) + " is not a power of two in [1, 16384]");
   if (tile.texels.size() != size_t(tile.size) * tile.size) return fail("texel count does not match the size");
+  if (!tile.entry_lower.empty() && tile.entry_lower.size() != tile.texels.size())
+    return fail("entry-rule bound count does not match the size");
+  for (size_t i = 0; i < tile.entry_lower.size(); ++i)
+    if (!std::isfinite(tile.entry_lower[i]))
+      return fail("texel " + std::to_string(i) + " has an invalid entry-rule bound " + std::to_string(tile.entry_lower[i]));
   for (size_t i = 0; i < tile.texels.size(); ++i) {
     const DepthInterval& t = tile.texels[i];
     if (!std::isfinite(t.lower) || !(t.lower <= t.upper))
@@ -34,8 +39,12 @@ MhHierarchy build_bottom_up(const TileIntervals& tile) {
   dense.levels = L;
   dense.masks.resize(L);
   dense.valued.resize(L + 1);
+  // The `surfaces` entry rule's bounds, when not yet applied (TileIntervals::entry_lower).
+  const float* entry = tile.entry_lower.empty() ? nullptr : tile.entry_lower.data();
   if (L == 0) {
-    dense.valued[0] = {tile.texels[0]};
+    DepthInterval only = tile.texels[0];
+    if (entry) only.lower = std::min(only.lower, entry[0]);
+    dense.valued[0] = {only};
     return to_hierarchy(std::move(dense));
   }
   constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -60,11 +69,18 @@ MhHierarchy build_bottom_up(const TileIntervals& tile) {
         for (unsigned r = 0; r < 8; ++r) {
           __builtin_prefetch(block + size_t(r) * tile.size);
           __builtin_prefetch(block + size_t(r) * tile.size + 7);
+          if (entry) __builtin_prefetch(entry + (block - tile.texels.data()) + size_t(r) * tile.size);
         }
       }
       if (bottom) {  // texels straight from the row-major input: a 2x2 block
-        const DepthInterval* row = &tile.texels[size_t(2 * morton_y(p)) * tile.size + 2 * morton_x(p)];
+        const size_t at = size_t(2 * morton_y(p)) * tile.size + 2 * morton_x(p);
+        const DepthInterval* row = &tile.texels[at];
         c[0] = row[0], c[1] = row[1], c[2] = row[tile.size], c[3] = row[tile.size + 1];
+        if (entry) {  // apply_entry_rule's min, as the texels are read
+          const float* bound = entry + at;
+          c[0].lower = std::min(c[0].lower, bound[0]), c[1].lower = std::min(c[1].lower, bound[1]);
+          c[2].lower = std::min(c[2].lower, bound[tile.size]), c[3].lower = std::min(c[3].lower, bound[tile.size + 1]);
+        }
       } else {
         for (unsigned i = 0; i < 4; ++i) c[i] = child[4 * p + i];
       }
@@ -116,7 +132,12 @@ MhHierarchy build_bottom_up(const TileIntervals& tile) {
 
 Result<MhHierarchy> build_mh(const TileIntervals& tile, const MhBuildOptions& options) {
   if (Status s = check_tile_intervals(tile); !s) return s.error();
-  if (options.construction == MhConstruction::top_down) return build_mh_top_down(tile);
+  if (options.construction == MhConstruction::top_down) {
+    if (tile.entry_lower.empty()) return build_mh_top_down(tile);
+    TileIntervals applied = tile;
+    apply_entry_rule(applied);
+    return build_mh_top_down(applied);
+  }
   return build_bottom_up(tile);
 }
 

@@ -12,8 +12,12 @@
 // Top-down (SBE16a Alg. 1, option): mh_top_down.hpp. Slower (O(n log n) per level).
 //
 // Works on any power-of-two grid of intervals, e.g. the tiles' root intervals for the top levels.
+// A tile whose entry-rule bounds are not yet applied (TileIntervals::entry_lower non-empty) is built
+// as apply_entry_rule would leave it, without that copy of the tile (the bottom-up build takes the
+// min as it reads the texels).
 // Errors: invalid_input when the size is not a power of two in [1, 16384], the texel count does
-// not match, or an interval is not [finite lower, upper >= lower] (upper may be +inf).
+// not match, or an interval is not [finite lower, upper >= lower] (upper may be +inf), or the
+// entry-rule bounds are not one finite value per texel.
 // Thread safety: pure function; independent calls may run concurrently.
 #pragma once
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <string>
 #include <tuple>
 
 #include "builder/mh_builder.hpp"
@@ -89,6 +90,51 @@ TEST(MhBuild, RejectsMalformedInput) {
   auto r = build_mh(tile);
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().code, ErrorCode::invalid_input);
+}
+
+// A tile whose entry-rule bounds are not yet applied builds the MH of the applied tile, byte for
+// byte, without the caller's copy (the build path since the encoders stopped copying the tile).
+TEST(MhBuild, UnappliedEntryBoundsBuildTheAppliedTilesTree) {
+  for (MhConstruction construction : {MhConstruction::bottom_up, MhConstruction::top_down}) {
+    for (MhSyntheticKind kind : kKinds) {
+      for (uint32_t size : {1u, 2u, 64u}) {
+        TileIntervals unapplied = make_synthetic_tile(kind, size, 91 + size);
+        unapplied.entry_lower.assign(unapplied.texels.size(), 1.0f);
+        uint64_t state = 12345 + size;
+        size_t lowered = 0;
+        for (size_t i = 0; i < unapplied.texels.size(); ++i) {
+          state = state * 6364136223846793005ull + 1442695040888963407ull;
+          const float lower = unapplied.texels[i].lower;
+          if (lower >= 1.0f || (state >> 33) % 3 == 0) continue;
+          unapplied.entry_lower[i] = lower - 0.01f * float((state >> 40) % 5 + 1);  // as the rule: below the first hit
+          ++lowered;
+        }
+        TileIntervals applied = unapplied;
+        apply_entry_rule(applied);
+        const std::string what = std::string(synthetic_kind_name(kind)) + " size " + std::to_string(size);
+        auto from_unapplied = build_mh(unapplied, {construction});
+        auto from_applied = build_mh(applied, {construction});
+        ASSERT_TRUE(from_unapplied.ok() && from_applied.ok()) << what;
+        EXPECT_EQ(encode_mh(*from_unapplied).value(), encode_mh(*from_applied).value()) << what;
+        if (size == 64 && kind != MhSyntheticKind::all_miss) {  // the bounds did change the tree
+          EXPECT_GT(lowered, 0u) << what;
+          TileIntervals ignored = unapplied;
+          ignored.entry_lower.clear();
+          EXPECT_NE(encode_mh(*build_mh(ignored, {construction})).value(), encode_mh(*from_applied).value()) << what;
+        }
+      }
+    }
+  }
+}
+
+TEST(MhBuild, RejectsEntryBoundsThatAreNotOneFiniteValuePerTexel) {
+  TileIntervals tile = make_synthetic_tile(MhSyntheticKind::noisy_plane, 4, 1);
+  tile.entry_lower.assign(15, 0.5f);
+  EXPECT_FALSE(build_mh(tile).ok());
+  tile.entry_lower.assign(16, 0.5f);
+  EXPECT_TRUE(build_mh(tile).ok());
+  tile.entry_lower[3] = std::nanf("");
+  EXPECT_FALSE(build_mh(tile).ok());
 }
 
 TEST(MhBuild, AllMissIsARootLeafWithAFiniteValue) {
