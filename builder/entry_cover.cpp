@@ -29,8 +29,8 @@ constexpr double kEntrySquareHalf = 0.51;
 // a vertex in S the triangles form a closed, unfolded fan), and S, connected and holding the centre,
 // lies inside it. docs/receiver-contracts.md, "The entry rule", has the argument.
 constexpr int kMaxCoverTriangles = 24;  // more: lower stays the first hit (a bounded cost per texel)
-float entry_lower_by_search(const TileGeometry& geometry, bool open, uint32_t first_prim,
-                  double cu, double cv, double global_u, double global_v, float lower, float slack, float tolerance) {
+float entry_lower_by_search(const TileGeometry& geometry, bool open, uint32_t first_prim, double cu, double cv,
+                            double global_u, double global_v, float lower, float slack, float tolerance) {
   const auto& planes = open ? geometry.open_planes : geometry.closed_planes;
   const auto& vertices = open ? geometry.open_vertices : geometry.closed_vertices;
   const auto& neighbours = open ? geometry.open_neighbours : geometry.closed_neighbours;
@@ -100,16 +100,9 @@ class EntryCover::Fast {
   Fast(const TileGeometry& geometry, double tile_u0, double tile_v0)
       : geometry_(geometry), tile_u0_(tile_u0), tile_v0_(tile_v0) {}
 
-  // The largest depth over the square centred at global (gu, gv) of the cover found, for a first hit
-  // `key` (prim | open flag); NaN when neither common case applies.
-  double deepest(uint32_t key, bool open, uint32_t prim, double gu, double gv) {
-    double out;
-    deepest_run(key, open, prim, gu, 1, gv, &out);
-    return out;
-  }
-
-  // deepest() of `count` squares of one row that share a first hit, centred at (gu_first + i, gv):
-  // the lines' and planes' v terms once per run, each texel's arithmetic otherwise the same.
+  // For `count` squares of one row that share a first hit `key` (prim | open flag), centred at global
+  // (gu_first + i, gv): the largest depth over each square of the cover found, NaN when neither
+  // common case applies. The lines' and planes' v terms once per run.
   void deepest_run(uint32_t key, bool open, uint32_t prim, double gu_first, uint32_t count, double gv, double* out) {
     const double none = std::numeric_limits<double>::quiet_NaN();
     Entry& entry = entry_for(key, open, prim);
@@ -236,7 +229,6 @@ class EntryCover::Fast {
   Entry entries_[kEntries];
 };
 
-
 EntryCover::EntryCover(const TileGeometry& geometry, TileCoord tile, uint32_t tile_size,
                        float slack, float tolerance)
     : geometry_(geometry),
@@ -274,14 +266,6 @@ void EntryCover::bound_row(uint32_t v, std::span<const uint32_t> first_hits, std
     }
     u = end;
   }
-}
-
-float EntryCover::bound(bool open, uint32_t prim, uint32_t u, uint32_t v, float lower) {
-  const double gu = tile_u0_ + u + 0.5, gv = tile_v0_ + v + 0.5;
-  const uint32_t key = prim | (open ? 1u << 31 : 0u);
-  const double deepest = fast_->deepest(key, open, prim, gu, gv);
-  if (deepest == deepest) return entry_bound(deepest, lower, slack_, tolerance_);
-  return entry_lower_by_search(geometry_, open, prim, u + 0.5, v + 0.5, gu, gv, lower, slack_, tolerance_);
 }
 
 }  // namespace shadowtiles

@@ -34,14 +34,12 @@ class EntryCover {
   // open set.
   static constexpr uint32_t kOpenFlag = 1u << 31;
 
-  // bound() of every hit texel (lower < 1) of tile row v into entry_lower (the others untouched),
-  // a run of texels with one first hit at a time; `first_hits[u]`: prim | kOpenFlag when open.
+  // The bound of every hit texel (lower < 1) of tile row v into entry_lower (the others untouched):
+  // for texel u, whose centre ray first hit `first_hits[u]` (prim | kOpenFlag when open) at depth
+  // row[u].lower, that depth itself when no cover is found. A run of texels with one first hit at a
+  // time.
   void bound_row(uint32_t v, std::span<const uint32_t> first_hits, std::span<const DepthInterval> row,
                  std::span<float> entry_lower);
-
-  // The bound of texel (u, v) (tile-local) whose centre ray first hit triangle `prim` (of the open
-  // set when `open`) at depth `lower` (< 1); `lower` itself when no cover is found.
-  float bound(bool open, uint32_t prim, uint32_t u, uint32_t v, float lower);
 
  private:
   class Fast;

@@ -20,7 +20,8 @@ Status check_tile_intervals(const TileIntervals& tile) {
     return fail("entry-rule bound count does not match the size");
   for (size_t i = 0; i < tile.entry_lower.size(); ++i)
     if (!std::isfinite(tile.entry_lower[i]))
-      return fail("texel " + std::to_string(i) + " has an invalid entry-rule bound " + std::to_string(tile.entry_lower[i]));
+      return fail("texel " + std::to_string(i) + " has an invalid entry-rule bound " +
+                  std::to_string(tile.entry_lower[i]));
   for (size_t i = 0; i < tile.texels.size(); ++i) {
     const DepthInterval& t = tile.texels[i];
     if (!std::isfinite(t.lower) || !(t.lower <= t.upper))
@@ -79,7 +80,8 @@ MhHierarchy build_bottom_up(const TileIntervals& tile) {
         if (entry) {  // apply_entry_rule's min, as the texels are read
           const float* bound = entry + at;
           c[0].lower = std::min(c[0].lower, bound[0]), c[1].lower = std::min(c[1].lower, bound[1]);
-          c[2].lower = std::min(c[2].lower, bound[tile.size]), c[3].lower = std::min(c[3].lower, bound[tile.size + 1]);
+          c[2].lower = std::min(c[2].lower, bound[tile.size]);
+          c[3].lower = std::min(c[3].lower, bound[tile.size + 1]);
         }
       } else {
         for (unsigned i = 0; i < 4; ++i) c[i] = child[4 * p + i];
