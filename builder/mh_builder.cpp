@@ -16,13 +16,12 @@ Status check_tile_intervals(const TileIntervals& tile) {
   if (tile.size == 0 || tile.size > 16384 || !std::has_single_bit(tile.size))
     return fail("tile size " + std::to_string(tile.size) + " is not a power of two in [1, 16384]");
   if (tile.texels.size() != size_t(tile.size) * tile.size) return fail("texel count does not match the size");
-  if (!tile.entry_lower.empty() && tile.entry_lower.size() != tile.texels.size())
-    return fail("entry-rule bound count does not match the size");
-  for (size_t i = 0; i < tile.entry_lower.size(); ++i)
-    if (!std::isfinite(tile.entry_lower[i]))
+  const bool entry = !tile.entry_lower.empty();
+  if (entry && tile.entry_lower.size() != tile.texels.size()) return fail("entry-rule bound count does not match the size");
+  for (size_t i = 0; i < tile.texels.size(); ++i) {  // one pass over the texels and their bounds
+    if (entry && !std::isfinite(tile.entry_lower[i]))
       return fail("texel " + std::to_string(i) + " has an invalid entry-rule bound " +
                   std::to_string(tile.entry_lower[i]));
-  for (size_t i = 0; i < tile.texels.size(); ++i) {
     const DepthInterval& t = tile.texels[i];
     if (!std::isfinite(t.lower) || !(t.lower <= t.upper))
       return fail("texel " + std::to_string(i) + " has an invalid interval [" + std::to_string(t.lower) + ", " +
