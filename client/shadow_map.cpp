@@ -370,14 +370,39 @@ Result<uint64_t> ShadowMap::pcf_lit_samples(store::Method method, int64_t cu, in
   return lit;
 }
 
+inline bool ShadowMap::plain_query(const Vec3& world, store::Method method, double bias_world) const {
+  const uint8_t m = uint8_t(method);
+  return method_present_[m] && !(bias_world < bias_floor_[m]) && bias_world >= 0 && std::isfinite(bias_world) &&
+         std::isfinite(world[0]) && std::isfinite(world[1]) && std::isfinite(world[2]);
+}
+
 Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, unsigned kernel,
                                     std::optional<double> bias, std::optional<unsigned> level,
                                     ShadowAnswer* answer_out) const {
+  // As query(): the common call skips the general path's Status and Result values.
+  const double bias_world = bias.value_or(meta_.default_bias);
+  if (level || kernel % 2 == 0 || kernel > kMaxPcfKernel || !plain_query(world, method, bias_world)) [[unlikely]]
+    return query_pcf_general(world, method, kernel, bias_world, level, answer_out);
+  ShadowAnswer answer;
+  answer.light = frame_.to_light(world);
+  const double resolution = layout_.resolution();
+  if (!(answer.light.u >= 0 && answer.light.u < resolution && answer.light.v >= 0 && answer.light.v < resolution))
+      [[unlikely]] {
+    answer.outside_map = true;
+    answer.value = std::numeric_limits<float>::infinity();
+    if (answer_out) *answer_out = answer;
+    return 1.0;
+  }
+  return pcf_fraction(method, kernel, bias_world, 255, std::nullopt, answer, answer_out);
+}
+
+Result<double> ShadowMap::query_pcf_general(const Vec3& world, store::Method method, unsigned kernel,
+                                            double bias_world, std::optional<unsigned> level,
+                                            ShadowAnswer* answer_out) const {
   if (kernel == 0 || kernel % 2 == 0 || kernel > kMaxPcfKernel)
     return make_error(ErrorCode::invalid_input,
                       "pcf kernel must be odd and in [1, " + std::to_string(kMaxPcfKernel) + "]");
   if (Status s = check_method(method); !s) return s.error();
-  const double bias_world = bias.value_or(meta_.default_bias);
   if (Status s = check_bias(method, bias_world); !s) return s.error();
   auto located = locate(world, bias_world, level);
   if (!located) return located.error();
@@ -386,6 +411,12 @@ Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, uns
     if (answer_out) *answer_out = answer;
     return 1.0;
   }
+  return pcf_fraction(method, kernel, bias_world, max_level, level, answer, answer_out);
+}
+
+Result<double> ShadowMap::pcf_fraction(store::Method method, unsigned kernel, double bias_world, unsigned max_level,
+                                       std::optional<unsigned> level, ShadowAnswer& answer,
+                                       ShadowAnswer* answer_out) const {
   const int64_t cu = int64_t(answer.light.u), cv = int64_t(answer.light.v);
   const float threshold = biased_depth(answer.light.depth, bias_world);
   auto lit = pcf_lit_samples(method, cu, cv, kernel, threshold, max_level, level);
@@ -406,37 +437,66 @@ Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, uns
   return fraction;
 }
 
-Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, std::optional<double> bias,
-                                      std::optional<unsigned> level) const {
-  if (Status s = check_method(method); !s) return s.error();
-  const double bias_world = bias.value_or(meta_.default_bias);
-  if (Status s = check_bias(method, bias_world); !s) return s.error();
-  auto located = locate(world, bias_world, level);
-  if (!located) return located.error();
-  auto [answer, max_level] = *located;
-  if (answer.outside_map) return answer;
+inline bool ShadowMap::sample_tile(store::Method method, double bias_world, unsigned max_level, ShadowAnswer& answer,
+                                   Error* error) const {
   const uint32_t u = uint32_t(answer.light.u), v = uint32_t(answer.light.v);
   // Same comparison as query_pcf, so a 1x1 kernel equals a point query exactly.
   const float threshold = biased_depth(answer.light.depth, bias_world);
-  if (level) {
-    if (auto coarse = top_value(method, u, v, *level)) {
-      answer.value = *coarse;
-      answer.lit = threshold <= answer.value;
-      return answer;
-    }
-  }
   const DecodedTile* decoded;
-  Error error;
-  if (!pinned_tile(method, u >> tile_shift_, v >> tile_shift_, &decoded, &error)) return error;
+  if (!pinned_tile(method, u >> tile_shift_, v >> tile_shift_, &decoded, error)) return false;
   if (!decoded) {
     answer.empty_tile = true;
     answer.value = std::numeric_limits<float>::infinity();
-    return answer;
+    return true;
   }
   const uint32_t mask = layout_.tile_size() - 1;
   const DecodedTile::Sample sample = decoded->sample(u & mask, v & mask, threshold, max_level);
   answer.value = sample.value;
   answer.lit = sample.lit;
+  return true;
+}
+
+Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, std::optional<double> bias,
+                                      std::optional<unsigned> level) const {
+  // The common call (method present, bias and point valid, finest level) without the general
+  // path's Status and Result values: those cost as much as a DAG-MH descent per lookup. Any other
+  // call takes the general path, which gives the same answers and every error message.
+  const double bias_world = bias.value_or(meta_.default_bias);
+  if (level || !plain_query(world, method, bias_world)) [[unlikely]]
+    return query_general(world, method, bias_world, level);
+  ShadowAnswer answer;
+  answer.light = frame_.to_light(world);
+  const double resolution = layout_.resolution();
+  if (!(answer.light.u >= 0 && answer.light.u < resolution && answer.light.v >= 0 && answer.light.v < resolution))
+      [[unlikely]] {
+    answer.outside_map = true;
+    answer.value = std::numeric_limits<float>::infinity();
+    return answer;
+  }
+  Error error;
+  if (!sample_tile(method, bias_world, 255, answer, &error)) [[unlikely]]
+    return error;
+  return answer;
+}
+
+Result<ShadowAnswer> ShadowMap::query_general(const Vec3& world, store::Method method, double bias_world,
+                                              std::optional<unsigned> level) const {
+  if (Status s = check_method(method); !s) return s.error();
+  if (Status s = check_bias(method, bias_world); !s) return s.error();
+  auto located = locate(world, bias_world, level);
+  if (!located) return located.error();
+  auto [answer, max_level] = *located;
+  if (answer.outside_map) return answer;
+  if (level) {
+    const uint32_t u = uint32_t(answer.light.u), v = uint32_t(answer.light.v);
+    if (auto coarse = top_value(method, u, v, *level)) {
+      answer.value = *coarse;
+      answer.lit = biased_depth(answer.light.depth, bias_world) <= answer.value;
+      return answer;
+    }
+  }
+  Error error;
+  if (!sample_tile(method, bias_world, max_level, answer, &error)) return error;
   return answer;
 }
 

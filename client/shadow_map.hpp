@@ -156,6 +156,22 @@ class ShadowMap {
   // when it falls off the map. Also returns the max level inside a tile tree for `level`.
   Result<std::pair<ShadowAnswer, unsigned>> locate(const Vec3& world, double bias_world,
                                                    std::optional<unsigned> level) const;
+  // True for a call every check passes (method present, bias allowed, finite point and bias): the
+  // fast paths of query() and query_pcf() take it; the general paths give the errors.
+  bool plain_query(const Vec3& world, store::Method method, double bias_world) const;
+  // query_pcf() for the calls its fast path leaves: errors, coarse levels.
+  Result<double> query_pcf_general(const Vec3& world, store::Method method, unsigned kernel, double bias_world,
+                                   std::optional<unsigned> level, ShadowAnswer* answer_out) const;
+  // The lit fraction of the kernel around `answer.light` (on the map), and *answer_out if asked.
+  Result<double> pcf_fraction(store::Method method, unsigned kernel, double bias_world, unsigned max_level,
+                              std::optional<unsigned> level, ShadowAnswer& answer, ShadowAnswer* answer_out) const;
+  // query() for the calls its fast path leaves: errors, coarse levels.
+  Result<ShadowAnswer> query_general(const Vec3& world, store::Method method, double bias_world,
+                                     std::optional<unsigned> level) const;
+  // Fills answer.value/lit/empty_tile from the tile under answer.light (on the map, method checked);
+  // false with *error set when the tile cannot be read.
+  bool sample_tile(store::Method method, double bias_world, unsigned max_level, ShadowAnswer& answer,
+                   Error* error) const;
   // The receiver's depth, clamped to the far plane (1), minus the bias, as compared with stored
   // values by every method, point and PCF.
   float biased_depth(double depth, double bias_world) const;
