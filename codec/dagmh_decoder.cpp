@@ -308,29 +308,71 @@ DagMhTileView::State DagMhTileView::start_state(uint32_t u, uint32_t v, unsigned
   }
 }
 
+// Whether node `bit` of the treelet at `t` holds a value, and if so its rank among the treelet's
+// valued nodes (set bits before it). The bitmap is read in place as little-endian 64-bit words: bits
+// at or past the treelet's end (the next treelet's, the chunk table's) never count, since only bits
+// below a node's bit are ranked and every node's bit lies inside the treelet.
+[[gnu::always_inline]] inline bool DagMhTileView::treelet_bit(const uint8_t* t, uint32_t bit, uint32_t* rank) const {
+  const uint64_t x = load_u64_before(t + 8 * (bit / 64), payload_end_);
+  if (!((x >> (bit % 64)) & 1u)) return false;
+  unsigned r = popcount64(x & low_bits(bit % 64));
+  for (unsigned w = 0; w < bit / 64; ++w) r += popcount64(load_u64_before(t + 8 * w, payload_end_));
+  *rank = r;
+  return true;
+}
+
 [[gnu::always_inline]] inline uint32_t DagMhTileView::treelet_find(const State& s, uint32_t u, uint32_t v,
                                                                    unsigned stop) const {
-  // The bitmap is read in place as little-endian 64-bit words: bits at or past the treelet's end
-  // (the next treelet's, the chunk table's) never count, since only bits below a node's bit are
-  // ranked and every node's bit lies inside the treelet.
   const uint8_t* t = treelets_ + size_t(s.ref) * treelet_bytes_;
-  auto word = [&](unsigned w) { return load_u64_before(t + 8 * w, payload_end_); };
   const unsigned d = std::min(H_ - 1, stop - s.level);
   uint32_t idx[F::kMaxTreeletHeight];
   idx[0] = 0;
   for (unsigned n = 0; n < d; ++n)
     idx[n + 1] = idx[n] + 1 + child_index(u, v, levels_ - 1 - (s.level + n)) * F::complete_nodes(H_ - 1 - n);
   // Finest level first: the deepest valued node on the path wins.
-  for (unsigned n = d + 1; n-- > 0;) {
-    const uint32_t bit = idx[n];
-    const uint64_t x = word(bit / 64);
-    if ((x >> (bit % 64)) & 1u) {
-      unsigned rank = popcount64(x & low_bits(bit % 64));
-      for (unsigned w = 0; w < bit / 64; ++w) rank += popcount64(word(w));
-      return s.count + rank;
-    }
-  }
+  uint32_t rank;
+  for (unsigned n = d + 1; n-- > 0;)
+    if (treelet_bit(t, idx[n], &rank)) return s.count + rank;
   return s.last;
+}
+
+// A PCF box inside one treelet (its root at or above the box's common ancestor, level `lca`): the
+// path's nodes down to the ancestor are every sample's, so their part of treelet_find is done once.
+[[gnu::always_inline]] inline DagMhTileView::TreeletPrefix DagMhTileView::treelet_prefix(const State& s, uint32_t u,
+                                                                                         uint32_t v,
+                                                                                         unsigned lca) const {
+  TreeletPrefix p;
+  p.d = std::min(H_ - 1, levels_ - s.level);
+  p.split = std::min(lca - s.level, p.d);
+  const uint8_t* t = treelets_ + size_t(s.ref) * treelet_bytes_;
+  uint32_t idx[F::kMaxTreeletHeight];
+  idx[0] = 0;
+  for (unsigned n = 0; n < p.split; ++n)
+    idx[n + 1] = idx[n] + 1 + child_index(u, v, levels_ - 1 - (s.level + n)) * F::complete_nodes(H_ - 1 - n);
+  p.node = idx[p.split];
+  p.result = s.last;
+  uint32_t rank;
+  for (unsigned n = p.split + 1; n-- > 0;)
+    if (treelet_bit(t, idx[n], &rank)) {
+      p.result = s.count + rank;
+      break;
+    }
+  return p;
+}
+
+// treelet_find(s, u, v, levels()) for a sample of the box `p` was made for: only the levels below
+// the common ancestor are walked.
+[[gnu::always_inline]] inline uint32_t DagMhTileView::treelet_find_below(const State& s, uint32_t u, uint32_t v,
+                                                                         const TreeletPrefix& p) const {
+  const uint8_t* t = treelets_ + size_t(s.ref) * treelet_bytes_;
+  uint32_t idx[F::kMaxTreeletHeight];
+  idx[p.split] = p.node;
+  for (unsigned n = p.split; n < p.d; ++n)
+    idx[n + 1] = idx[n] + 1 + child_index(u, v, levels_ - 1 - (s.level + n)) * F::complete_nodes(H_ - 1 - n);
+  uint32_t rank;
+  for (unsigned n = p.d; n > p.split; --n)
+    if (treelet_bit(t, idx[n], &rank)) return s.count + rank;
+  return p.result;
 }
 
 [[gnu::always_inline]] inline uint32_t DagMhTileView::resolve(State s, uint32_t u, uint32_t v, unsigned stop) const {
@@ -479,6 +521,12 @@ SHADOWTILES_ISA_CLONES uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32
   constexpr unsigned kGroup = 32;
   uint32_t indices[kGroup];
   unsigned count = 0;
+  // A box inside one treelet: every sample's walk stays in it (no DAG step), so the treelet levels
+  // down to the common ancestor are read once, not per sample.
+  const unsigned lca = L - unsigned(std::bit_width((u0 ^ u1) | (v0 ^ v1)));
+  const bool in_treelet = s.kind == kTreelet && s.level <= lca;  // (callers walk no deeper than lca)
+  TreeletPrefix prefix;
+  if (in_treelet) prefix = treelet_prefix(s, u0, v0, lca);
   // Inlined (as every helper here) so it runs in the caller's x86-64-v3 copy, not the baseline.
   auto flush = [&]() __attribute__((always_inline)) {
     for (unsigned i = 0; i < count; ++i) prefetch_chunk_entry(indices[i]);
@@ -499,7 +547,9 @@ SHADOWTILES_ISA_CLONES uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32
       }
       end = c.level;
       pu = u, pv = v;
-      indices[count++] = c.kind == kTreelet ? treelet_find(c, u, v, L) : c.last;
+      indices[count++] = c.kind != kTreelet ? c.last
+                         : in_treelet          ? treelet_find_below(c, u, v, prefix)
+                                               : treelet_find(c, u, v, L);
       if (count == kGroup) flush();
     }
   flush();

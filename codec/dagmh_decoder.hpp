@@ -101,6 +101,15 @@ class DagMhTileView {
   void step(State& s, uint32_t u, uint32_t v) const;  // DAG node -> child
   uint32_t resolve(State s, uint32_t u, uint32_t v, unsigned stop) const;
   uint32_t treelet_find(const State& s, uint32_t u, uint32_t v, unsigned stop) const;
+  bool treelet_bit(const uint8_t* treelet, uint32_t bit, uint32_t* rank) const;
+  // The shared part of a PCF box's walks in one treelet: levels 0..split of it (node `node` at
+  // `split`) are every sample's, `result` their answer when no deeper level holds a value.
+  struct TreeletPrefix {
+    unsigned d = 0, split = 0;
+    uint32_t node = 0, result = 0;
+  };
+  TreeletPrefix treelet_prefix(const State& s, uint32_t u, uint32_t v, unsigned lca) const;
+  uint32_t treelet_find_below(const State& s, uint32_t u, uint32_t v, const TreeletPrefix& prefix) const;
   uint32_t chunk_of(uint32_t index) const;
   void prefetch_chunk_entry(uint32_t index) const;
   void prefetch_chunk(uint32_t index) const;
