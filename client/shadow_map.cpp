@@ -337,12 +337,22 @@ Result<uint64_t> ShadowMap::pcf_lit_samples(store::Method method, int64_t cu, in
   const int64_t half = kernel / 2;
   const int64_t size = layout_.tile_size();
   const int64_t side = int64_t(layout_.resolution());
+  const unsigned shift = tile_shift_;
+  if (max_level == 255 && cu - half >= 0 && cv - half >= 0 && cu + half < side && cv + half < side &&
+      (cu - half) >> shift == (cu + half) >> shift && (cv - half) >> shift == (cv + half) >> shift) [[likely]] {
+    // The common kernel: on the map and inside one tile.
+    const DecodedTile* t;
+    Error error;
+    if (!pinned_tile(method, uint32_t(cu >> shift), uint32_t(cv >> shift), &t, &error)) return error;
+    if (!t) return uint64_t(kernel) * kernel;  // empty tile: lit
+    const uint32_t mask = uint32_t(size - 1);
+    return uint64_t(t->lit_count(uint32_t(cu - half) & mask, uint32_t(cv - half) & mask, kernel, kernel, threshold));
+  }
   // The kernel box, clipped to the map (samples outside are lit), split into its parts per tile.
   const int64_t u_lo = cu - half, u_hi = cu + half, v_lo = cv - half, v_hi = cv + half;
   const int64_t cu_lo = std::max<int64_t>(u_lo, 0), cu_hi = std::min<int64_t>(u_hi, side - 1);
   const int64_t cv_lo = std::max<int64_t>(v_lo, 0), cv_hi = std::min<int64_t>(v_hi, side - 1);
   uint64_t lit = uint64_t(kernel) * kernel - uint64_t(cu_hi - cu_lo + 1) * uint64_t(cv_hi - cv_lo + 1);
-  const unsigned shift = tile_shift_;
   for (int64_t ty = cv_lo >> shift; ty <= cv_hi >> shift; ++ty) {
     for (int64_t tx = cu_lo >> shift; tx <= cu_hi >> shift; ++tx) {
       const DecodedTile* t;
