@@ -518,8 +518,10 @@ SHADOWTILES_ISA_CLONES uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32
   // can start, so the group's entries are requested together, then its chunks, then the values
   // decoded: a 3x3 kernel's samples lie in up to 4 chunks, whose misses then overlap instead of
   // queuing. (Session 15 prefetched the chunks alone and the miss moved to the entries.)
+  // Samples with the value index of the one before them join its run: on a shallow tree most of a
+  // kernel is one run, read once and with no prefetch.
   constexpr unsigned kGroup = 32;
-  uint32_t indices[kGroup];
+  uint32_t indices[kGroup], run_lengths[kGroup];
   unsigned count = 0;
   // A box inside one treelet: every sample's walk stays in it (no DAG step), so the treelet levels
   // down to the common ancestor are read once, not per sample.
@@ -529,13 +531,23 @@ SHADOWTILES_ISA_CLONES uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32
   if (in_treelet) prefix = treelet_prefix(s, u0, v0, lca);
   // Inlined (as every helper here) so it runs in the caller's x86-64-v3 copy, not the baseline.
   auto flush = [&]() __attribute__((always_inline)) {
-    for (unsigned i = 0; i < count; ++i) prefetch_chunk_entry(indices[i]);
-    for (unsigned i = 0; i < count; ++i) prefetch_chunk(indices[i]);
+    if (count > 1) {
+      for (unsigned i = 0; i < count; ++i) prefetch_chunk_entry(indices[i]);
+      for (unsigned i = 0; i < count; ++i) prefetch_chunk(indices[i]);
+    }
     for (unsigned i = 0; i < count; ++i) {
       if (indices[i] != cached_index) cached_index = indices[i], cached_value = value_of(indices[i]);
-      lit += depth <= cached_value + bias;
+      if (depth <= cached_value + bias) lit += run_lengths[i];
     }
     count = 0;
+  };
+  auto add = [&](uint32_t index) __attribute__((always_inline)) {
+    if (count > 0 && indices[count - 1] == index) {
+      ++run_lengths[count - 1];
+      return;
+    }
+    if (count == kGroup) flush();
+    indices[count] = index, run_lengths[count++] = 1;
   };
   for (uint32_t v = v0; v <= v1; ++v)
     for (uint32_t u = u0; u <= u1; ++u) {
@@ -547,10 +559,9 @@ SHADOWTILES_ISA_CLONES uint32_t DagMhTileView::pcf_lit_count(uint32_t u0, uint32
       }
       end = c.level;
       pu = u, pv = v;
-      indices[count++] = c.kind != kTreelet ? c.last
-                         : in_treelet          ? treelet_find_below(c, u, v, prefix)
-                                               : treelet_find(c, u, v, L);
-      if (count == kGroup) flush();
+      add(c.kind != kTreelet ? c.last
+          : in_treelet       ? treelet_find_below(c, u, v, prefix)
+                             : treelet_find(c, u, v, L));
     }
   flush();
   return lit;
