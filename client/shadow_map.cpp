@@ -316,19 +316,24 @@ std::optional<float> ShadowMap::top_value(store::Method method, uint32_t u, uint
   return it->second->value(u / layout_.tile_size(), v / layout_.tile_size(), level);
 }
 
+[[gnu::always_inline]] inline ShadowAnswer ShadowMap::project(const Vec3& world) const {
+  ShadowAnswer answer;
+  answer.light = frame_.to_light(world);
+  const double resolution = layout_.resolution();
+  if (!(answer.light.u >= 0 && answer.light.u < resolution && answer.light.v >= 0 && answer.light.v < resolution))
+      [[unlikely]] {
+    answer.outside_map = true;
+    answer.value = std::numeric_limits<float>::infinity();
+  }
+  return answer;
+}
+
 Result<std::pair<ShadowAnswer, unsigned>> ShadowMap::locate(const Vec3& world, double bias_world,
                                                             std::optional<unsigned> level) const {
   if (Status s = check_query(world, bias_world); !s) return s.error();
   auto max_level = tile_max_level(level);
   if (!max_level) return max_level.error();
-  ShadowAnswer answer;
-  answer.light = frame_.to_light(world);
-  const double resolution = layout_.resolution();
-  if (!(answer.light.u >= 0 && answer.light.u < resolution && answer.light.v >= 0 && answer.light.v < resolution)) {
-    answer.outside_map = true;
-    answer.value = std::numeric_limits<float>::infinity();
-  }
-  return std::pair{answer, *max_level};
+  return std::pair{project(world), *max_level};
 }
 
 Result<uint64_t> ShadowMap::pcf_lit_samples(store::Method method, int64_t cu, int64_t cv, unsigned kernel,
@@ -393,13 +398,8 @@ Result<double> ShadowMap::query_pcf(const Vec3& world, store::Method method, uns
   const double bias_world = bias.value_or(meta_.default_bias);
   if (level || kernel % 2 == 0 || kernel > kMaxPcfKernel || !plain_query(world, method, bias_world)) [[unlikely]]
     return query_pcf_general(world, method, kernel, bias_world, level, answer_out);
-  ShadowAnswer answer;
-  answer.light = frame_.to_light(world);
-  const double resolution = layout_.resolution();
-  if (!(answer.light.u >= 0 && answer.light.u < resolution && answer.light.v >= 0 && answer.light.v < resolution))
-      [[unlikely]] {
-    answer.outside_map = true;
-    answer.value = std::numeric_limits<float>::infinity();
+  ShadowAnswer answer = project(world);
+  if (answer.outside_map) [[unlikely]] {
     if (answer_out) *answer_out = answer;
     return 1.0;
   }
@@ -474,15 +474,9 @@ Result<ShadowAnswer> ShadowMap::query(const Vec3& world, store::Method method, s
   const double bias_world = bias.value_or(meta_.default_bias);
   if (level || !plain_query(world, method, bias_world)) [[unlikely]]
     return query_general(world, method, bias_world, level);
-  ShadowAnswer answer;
-  answer.light = frame_.to_light(world);
-  const double resolution = layout_.resolution();
-  if (!(answer.light.u >= 0 && answer.light.u < resolution && answer.light.v >= 0 && answer.light.v < resolution))
-      [[unlikely]] {
-    answer.outside_map = true;
-    answer.value = std::numeric_limits<float>::infinity();
+  ShadowAnswer answer = project(world);
+  if (answer.outside_map) [[unlikely]]
     return answer;
-  }
   Error error;
   if (!sample_tile(method, bias_world, 255, answer, &error)) [[unlikely]]
     return error;

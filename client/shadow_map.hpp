@@ -152,6 +152,8 @@ class ShadowMap {
   Status check_method(store::Method method) const;
   // Refuses a bias below what `method`'s values answer for (StoreMeta::min_query_bias).
   Status check_bias(store::Method method, double bias_world) const;
+  // The point in light space, flagged outside_map (lit, value +inf) when it falls off the map.
+  ShadowAnswer project(const Vec3& world) const;
   // Validates a query and maps the point to light space; the answer is flagged outside_map (lit)
   // when it falls off the map. Also returns the max level inside a tile tree for `level`.
   Result<std::pair<ShadowAnswer, unsigned>> locate(const Vec3& world, double bias_world,
