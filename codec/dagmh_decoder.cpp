@@ -321,23 +321,9 @@ DagMhTileView::State DagMhTileView::start_state(uint32_t u, uint32_t v, unsigned
   return true;
 }
 
-[[gnu::always_inline]] inline uint32_t DagMhTileView::treelet_find(const State& s, uint32_t u, uint32_t v,
-                                                                   unsigned stop) const {
-  const uint8_t* t = treelets_ + size_t(s.ref) * treelet_bytes_;
-  const unsigned d = std::min(H_ - 1, stop - s.level);
-  uint32_t idx[F::kMaxTreeletHeight];
-  idx[0] = 0;
-  for (unsigned n = 0; n < d; ++n)
-    idx[n + 1] = idx[n] + 1 + child_index(u, v, levels_ - 1 - (s.level + n)) * F::complete_nodes(H_ - 1 - n);
-  // Finest level first: the deepest valued node on the path wins.
-  uint32_t rank;
-  for (unsigned n = d + 1; n-- > 0;)
-    if (treelet_bit(t, idx[n], &rank)) return s.count + rank;
-  return s.last;
-}
-
-// A PCF box inside one treelet (its root at or above the box's common ancestor, level `lca`): the
-// path's nodes down to the ancestor are every sample's, so their part of treelet_find is done once.
+// The treelet's part of the walk toward (u, v) down to level `lca` (at or below the treelet's root):
+// the node there and the deepest valued node on the way, finest first (s.last when none). A PCF box
+// inside one treelet, `lca` its common ancestor, shares this part among all its samples.
 [[gnu::always_inline]] inline DagMhTileView::TreeletPrefix DagMhTileView::treelet_prefix(const State& s, uint32_t u,
                                                                                          uint32_t v,
                                                                                          unsigned lca) const {
@@ -358,6 +344,12 @@ DagMhTileView::State DagMhTileView::start_state(uint32_t u, uint32_t v, unsigned
       break;
     }
   return p;
+}
+
+// The walk to level `stop` inside the treelet: the prefix down to `stop` is the whole walk.
+[[gnu::always_inline]] inline uint32_t DagMhTileView::treelet_find(const State& s, uint32_t u, uint32_t v,
+                                                                   unsigned stop) const {
+  return treelet_prefix(s, u, v, stop).result;
 }
 
 // treelet_find(s, u, v, levels()) for a sample of the box `p` was made for: only the levels below
