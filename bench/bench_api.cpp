@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 #include <sstream>
 #include <string>
@@ -101,6 +102,9 @@ int run(int argc, char** argv) {
     const uint64_t cached = m.cache_stats().bytes;
     std::printf("%-6s decoded tiles in cache: %.2f MiB (all methods so far)\n", name.c_str(), double(cached) / (1 << 20));
     if (has_mode("batch")) {
+      // BATCH_REPEATS: more batches per rate, for `perf record` of the batch path alone.
+      const char* repeats_env = std::getenv("BATCH_REPEATS");
+      const int batch_repeats = repeats_env ? std::max(1, std::atoi(repeats_env)) : 5;
       for (unsigned kernel : {1u, 3u}) {
         double rate[2] = {0, 0};
         for (unsigned threads : {1u, 2u}) {
@@ -109,7 +113,7 @@ int run(int argc, char** argv) {
           batch.threads = threads;
           ShadowMap::BatchAnswers answers;
           double best = 0;
-          for (int repeat = 0; repeat < 5; ++repeat) {
+          for (int repeat = 0; repeat < batch_repeats; ++repeat) {
             const auto start = std::chrono::steady_clock::now();
             if (Status s = m.query_batch(random, *method, batch, answers); !s) {
               std::fprintf(stderr, "%s\n", s.error().message.c_str());

@@ -20,9 +20,12 @@ class BatchTexelKeys {
   static BatchTexelKeys for_key_bits(unsigned key_bits) { return BatchTexelKeys(key_bits <= 30); }
 
   bool packed() const { return packed_; }
-  uint64_t make(uint32_t u, uint32_t v) const {
-    return packed_ ? morton_encode16(u, v) | (uint64_t(u) << 32) | (uint64_t(v) << 48) : morton_encode(u, v);
+  uint64_t make(uint32_t u, uint32_t v) const { return packed_ ? make_packed(u, v) : make_wide(u, v); }
+  // The two layouts' keys, for loops that test packed() once.
+  static uint64_t make_packed(uint32_t u, uint32_t v) {
+    return morton_encode16(u, v) | (uint64_t(u) << 32) | (uint64_t(v) << 48);
   }
+  static uint64_t make_wide(uint32_t u, uint32_t v) { return morton_encode(u, v); }
   uint64_t code(uint64_t key) const { return key & code_mask_; }
   uint32_t u(uint64_t key) const { return packed_ ? uint32_t(key >> 32) & 0xFFFFu : morton_u(key); }
   uint32_t v(uint64_t key) const { return packed_ ? uint32_t(key >> 48) : morton_v(key); }

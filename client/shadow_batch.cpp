@@ -145,23 +145,53 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
     const BatchTexelKeys texel_keys = keys;
     const auto bucket = bucket_of;
     const double res = resolution, bias = bias_depth;
+    // In blocks of points: the transform (a loop without a branch, which the compiler vectorises),
+    // then keys, then items and histogram. One loop doing all of it per point cost a quarter more
+    // (fzk_haus 16384², 1M points: 8.7 -> 6.9 ms for this pass).
+    constexpr size_t kBlock = 64;
+    double block_u[kBlock], block_v[kBlock], block_depth[kBlock];
+    uint64_t block_key[kBlock];
+    float block_threshold[kBlock];
     for (size_t c = c0; c < c1 && !failed; ++c) {
       uint32_t* hist = &histogram[c * (buckets + 1)];
-      for (size_t i = c * points_per_chunk, end = std::min(n, i + points_per_chunk); i < end; ++i) {
-        const Vec3& p = points[i];
-        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
-          return fail(make_error(ErrorCode::invalid_input, "point coordinates must be finite"));
-        const LightSpacePoint light = frame.to_light(p);
-        BatchItem& item = items[i];
-        item.index = uint32_t(i);
-        if (!(light.u >= 0 && light.u < res && light.v >= 0 && light.v < res)) {
-          item.key = kOffMap;
-          item.threshold = 0;
-        } else {
-          item.key = texel_keys.make(uint32_t(light.u), uint32_t(light.v));
-          item.threshold = float(std::min(light.depth, 1.0) - bias);  // biased_depth(), bias hoisted
+      for (size_t first = c * points_per_chunk, end = std::min(n, first + points_per_chunk); first < end;
+           first += kBlock) {
+        const size_t count = std::min(kBlock, end - first);
+        const Vec3* const block_points = points.data() + first;
+        for (size_t j = 0; j < count; ++j) {
+          const LightSpacePoint light = frame.to_light(block_points[j]);
+          block_u[j] = light.u;
+          block_v[j] = light.v;
+          block_depth[j] = light.depth;
         }
-        ++hist[bucket(item.key)];
+        // Keys and thresholds; off the map: kOffMap, threshold 0.
+        size_t off_map = 0;
+        auto keys_of_block = [&](auto make_key) {
+          for (size_t j = 0; j < count; ++j) {
+            const double u = block_u[j], v = block_v[j];
+            const bool on_map = u >= 0 && u < res && v >= 0 && v < res;
+            off_map += !on_map;
+            const uint64_t key = make_key(on_map ? uint32_t(u) : 0u, on_map ? uint32_t(v) : 0u);
+            block_key[j] = on_map ? key : kOffMap;
+            block_threshold[j] = on_map ? float(std::min(block_depth[j], 1.0) - bias) : 0.0f;  // biased_depth(), bias hoisted
+          }
+        };
+        // One loop per key layout: a loop with the layout's test inside is not vectorised.
+        if (texel_keys.packed())
+          keys_of_block([](uint32_t u, uint32_t v) { return BatchTexelKeys::make_packed(u, v); });
+        else
+          keys_of_block([](uint32_t u, uint32_t v) { return BatchTexelKeys::make_wide(u, v); });
+        // A coordinate that is not finite makes u not finite (every axis term adds it, and inf * 0
+        // is NaN), so such points are all off the map: checked only there.
+        for (size_t j = 0; off_map > 0 && j < count; ++j) {
+          const Vec3& p = block_points[j];
+          if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+            return fail(make_error(ErrorCode::invalid_input, "point coordinates must be finite"));
+        }
+        for (size_t j = 0; j < count; ++j) {
+          items[first + j] = {block_key[j], uint32_t(first + j), block_threshold[j]};
+          ++hist[bucket(block_key[j])];
+        }
       }
     }
   });

@@ -174,6 +174,16 @@ TEST_F(ShadowMapBatchTest, BadBatchesAreErrors) {
   auto bad = m.query_batch(points, store::Method::mh, {}, answers);
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().code, ErrorCode::invalid_input);
+  // Infinite coordinates too, on every axis and both signs (the batch checks finiteness only for
+  // points its transform puts off the map, which every such point is).
+  for (int axis = 0; axis < 3; ++axis)
+    for (double infinite : {double(INFINITY), -double(INFINITY)}) {
+      points[57] = (*points_)[0];
+      points[57][axis] = infinite;
+      auto error = m.query_batch(points, store::Method::mh, {}, answers);
+      ASSERT_FALSE(error.ok()) << axis << " " << infinite;
+      EXPECT_EQ(error.error().code, ErrorCode::invalid_input);
+    }
   points[57] = (*points_)[0];
   ShadowMap::BatchOptions options;
   options.kernel = 4;
