@@ -110,7 +110,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   const size_t points_per_chunk = std::max(kMinPointsPerChunk, (n + kChunksPerBatch - 1) / kChunksPerBatch);
   const size_t chunks = (n + points_per_chunk - 1) / points_per_chunk;
   // Buffers kept in `out` between batches (see BatchAnswers); their old contents are overwritten.
-  if (out.sort_items.size() < 2 * n) out.sort_items.resize(2 * n);
+  if (out.sort_items.size() < 2 * n) out.sort_items.resize_for_overwrite(2 * n);
   BatchItem* const items = out.sort_items.data();
   BatchItem* const sorted = items + n;
   std::vector<uint32_t>& histogram = out.sort_histogram;
