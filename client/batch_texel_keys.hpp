@@ -20,8 +20,8 @@ class BatchTexelKeys {
   static BatchTexelKeys for_key_bits(unsigned key_bits) { return BatchTexelKeys(key_bits <= 30); }
 
   bool packed() const { return packed_; }
-  uint64_t make(uint32_t u, uint32_t v) const { return packed_ ? make_packed(u, v) : make_wide(u, v); }
-  // The two layouts' keys, for loops that test packed() once.
+  // The key of texel (u, v) in each layout: make_packed when packed(), else make_wide (the batch
+  // tests packed() once per block of points, not per point).
   static uint64_t make_packed(uint32_t u, uint32_t v) {
     return morton_encode16(u, v) | (uint64_t(u) << 32) | (uint64_t(v) << 48);
   }

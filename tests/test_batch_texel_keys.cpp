@@ -33,7 +33,7 @@ void expect_round_trips(unsigned resolution_log2, bool packed) {
   std::mt19937 rng(resolution_log2);
   for (int i = 0; i < 20000; ++i) texels.push_back({rng() & last, rng() & last});
   for (auto [u, v] : texels) {
-    const uint64_t key = keys.make(u, v);
+    const uint64_t key = packed ? BatchTexelKeys::make_packed(u, v) : BatchTexelKeys::make_wide(u, v);
     ASSERT_EQ(keys.code(key), morton_encode(u, v)) << u << ", " << v << " at 2^" << resolution_log2;
     ASSERT_EQ(keys.u(key), u);
     ASSERT_EQ(keys.v(key), v);
@@ -53,9 +53,10 @@ TEST(BatchTexelKeys, CodesOrderLikeMortonCodes) {
   // The sort orders by code(): packed keys must order texels as their Morton codes do, whatever
   // the coordinates stored above them.
   const BatchTexelKeys keys = BatchTexelKeys::for_key_bits(30);
-  EXPECT_LT(keys.code(keys.make(1, 0)), keys.code(keys.make(0, 1)));
-  EXPECT_LT(keys.code(keys.make(0x7FFF, 0x7FFE)), keys.code(keys.make(0x7FFE, 0x7FFF)));
-  EXPECT_LT(keys.code(keys.make(0x7FFF, 0)), keys.code(keys.make(0, 0x4000)));
+  auto make = BatchTexelKeys::make_packed;
+  EXPECT_LT(keys.code(make(1, 0)), keys.code(make(0, 1)));
+  EXPECT_LT(keys.code(make(0x7FFF, 0x7FFE)), keys.code(make(0x7FFE, 0x7FFF)));
+  EXPECT_LT(keys.code(make(0x7FFF, 0)), keys.code(make(0, 0x4000)));
 }
 
 }  // namespace
