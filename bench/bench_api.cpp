@@ -4,7 +4,7 @@
 // Receivers: texel centres drawn uniformly over the map's non-empty texels, placed on the stored
 // surface (raw's lower depth), so every lookup descends to a real surface like the bench's receivers.
 // Usage: bench_api STORE [METHODS=raw,mh,mmh,dagmh] [RECEIVERS=1000000] [SECONDS=0.5] [MODES=all]
-//   MODES: comma list of point,pcf3,batch (default all)
+//   MODES: comma list of point,pcf3,batch (default all); batch1: query_batch of points only
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -101,11 +101,13 @@ int run(int argc, char** argv) {
     // Decoded bytes this method's tiles hold in the cache (every tile the receivers touch).
     const uint64_t cached = m.cache_stats().bytes;
     std::printf("%-6s decoded tiles in cache: %.2f MiB (all methods so far)\n", name.c_str(), double(cached) / (1 << 20));
-    if (has_mode("batch")) {
+    if (has_mode("batch") || has_mode("batch1")) {
       // BATCH_REPEATS: more batches per rate, for `perf record` of the batch path alone.
       const char* repeats_env = std::getenv("BATCH_REPEATS");
       const int batch_repeats = repeats_env ? std::max(1, std::atoi(repeats_env)) : 5;
+      // MODES batch1: point batches only (for `perf record` of that path).
       for (unsigned kernel : {1u, 3u}) {
+        if (kernel != 1 && !has_mode("batch")) continue;
         double rate[2] = {0, 0};
         for (unsigned threads : {1u, 2u}) {
           ShadowMap::BatchOptions batch;
@@ -115,9 +117,14 @@ int run(int argc, char** argv) {
           double best = 0;
           for (int repeat = 0; repeat < batch_repeats; ++repeat) {
             const auto start = std::chrono::steady_clock::now();
-            if (Status s = m.query_batch(random, *method, batch, answers); !s) {
-              std::fprintf(stderr, "%s\n", s.error().message.c_str());
-              return 1;
+            // BATCH_SPLIT=k: the same points as k batches one after the other (how density matters).
+            static const size_t split = std::max(1, std::getenv("BATCH_SPLIT") ? std::atoi(std::getenv("BATCH_SPLIT")) : 1);
+            for (size_t part = 0; part < split; ++part) {
+              const size_t a = random.size() * part / split, b = random.size() * (part + 1) / split;
+              if (Status s = m.query_batch(std::span<const Vec3>(random).subspan(a, b - a), *method, batch, answers); !s) {
+                std::fprintf(stderr, "%s\n", s.error().message.c_str());
+                return 1;
+              }
             }
             const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             best = std::max(best, double(random.size()) / dt);
