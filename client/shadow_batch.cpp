@@ -9,7 +9,8 @@
 //      of points per tile: the tile is looked up once per run, point queries go to the decoder's
 //      shared-path walk (lit_sorted), PCF kernels inside the tile to lit_count_sorted (descents to the
 //      kernels' common ancestors shared along the curve), kernels crossing a
-//      tile or the map's edge and coarse levels to the per-point path.
+//      tile or the map's edge and coarse levels to the per-point path. Point answers go to a byte
+//      per point (BatchAnswers::lit_bytes), which the last pass turns into `lit`'s floats.
 // Every answer is computed by the same expressions as query() / query_pcf(), so they are equal.
 #include <algorithm>
 #include <atomic>
@@ -85,9 +86,18 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   const bool coarse = level && *level < layout_.tile_level() && top_trees_.count(method);
 
   const size_t n = points.size();
-  out.lit.assign(n, 1.0f);
   out.outside.clear();
-  if (n == 0) return {};
+  if (n == 0) {
+    out.lit.clear();
+    return {};
+  }
+  // Points: bytes first (lit unless the walk says otherwise), floats at the end. PCF: floats.
+  if (kernel == 1) {
+    out.lit.resize(n);
+    out.lit_bytes.assign(n, 1);
+  } else {
+    out.lit.assign(n, 1.0f);
+  }
   auto parallel_for = [&](size_t count, const std::function<void(size_t, size_t)>& fn) {
     if (options.parallel_for) return options.parallel_for(count, fn);
     unsigned threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
@@ -272,7 +282,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
             for (uint32_t i = run; i < run_end; ++i) {
               const BatchItem& item = bucket(i);
               auto value = top_value(method, keys.u(item.key), keys.v(item.key), *level);
-              out.lit[item.index] = value ? float(item.threshold <= *value) : 1.0f;
+              out.lit_bytes[item.index] = value ? uint8_t(item.threshold <= *value) : uint8_t(1);
             }
           } else if (tile) {
             for (uint32_t i = run; i < run_end;) {
@@ -284,8 +294,8 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
               }
               tile->lit_sorted({queries, block}, max_level, lit);
               // Without a branch: which points are lit is as good as random here.
-              float* const answers = out.lit.data();
-              for (size_t j = 0; j < block; ++j) answers[query_index[j]] = float(lit[j] != 0);
+              uint8_t* const answers = out.lit_bytes.data();
+              for (size_t j = 0; j < block; ++j) answers[query_index[j]] = uint8_t(lit[j] != 0);
               i += uint32_t(block);
             }
           }  // empty tile: lit (already 1)
@@ -323,6 +333,14 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
     }
   });
   if (first_error) return *first_error;
+  // The point answers' bytes to floats, in the callers' order (the walk wrote them in the sort's).
+  if (kernel == 1)
+    claim_chunks([&](size_t c0, size_t c1) {
+      const size_t first = c0 * points_per_chunk, end = std::min(n, c1 * points_per_chunk);
+      const uint8_t* const bytes = out.lit_bytes.data();
+      float* const answers = out.lit.data();
+      for (size_t i = first; i < end; ++i) answers[i] = float(bytes[i]);
+    });
   return {};
 }
 
