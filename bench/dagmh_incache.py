@@ -20,8 +20,8 @@ TARGET = 1.3  # DAG-MH time / MMH time, at most
 FILTER = "BM_Lookup/.*/threads:1$"
 
 
-def run_bench(binary):
-    out = subprocess.run([binary, f"--benchmark_filter={FILTER}", "--benchmark_format=json"],
+def run_bench(binary, filter_=FILTER):
+    out = subprocess.run([binary, f"--benchmark_filter={filter_}", "--benchmark_format=json"],
                          check=True, capture_output=True, text=True).stdout
     return json.loads(out)
 
@@ -79,8 +79,9 @@ def main():
     ap.add_argument("--bench", default="build/bench/bench_dagmh")
     ap.add_argument("--json", help="read a saved run instead of running the bench")
     ap.add_argument("--md", default="BENCHMARKS.md")
+    ap.add_argument("--filter", default=FILTER, help="benchmark filter (default: every lookup on one thread)")
     args = ap.parse_args()
-    run = json.load(open(args.json)) if args.json else run_bench(args.bench)
+    run = json.load(open(args.json)) if args.json else run_bench(args.bench, args.filter)
     table = cells(run)
     if not table:
         sys.exit("no MMH / DAG-MH lookup pairs in the run")
