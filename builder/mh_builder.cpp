@@ -18,7 +18,15 @@ Status check_tile_intervals(const TileIntervals& tile) {
   if (tile.texels.size() != size_t(tile.size) * tile.size) return fail("texel count does not match the size");
   const bool entry = !tile.entry_lower.empty();
   if (entry && tile.entry_lower.size() != tile.texels.size()) return fail("entry-rule bound count does not match the size");
-  for (size_t i = 0; i < tile.texels.size(); ++i) {  // one pass over the texels and their bounds
+  // A pass without a branch first (it vectorises: 1.3 % of an oahu 16384² build's samples went to
+  // the loop below); the loop names the first bad texel only when there is one.
+  auto finite = [](float x) { return (std::bit_cast<uint32_t>(x) & 0x7f800000u) != 0x7f800000u; };
+  bool bad = false;
+  for (const DepthInterval& t : tile.texels) bad |= !finite(t.lower) | !(t.lower <= t.upper);
+  if (entry)
+    for (float bound : tile.entry_lower) bad |= !finite(bound);
+  if (!bad) return Status::success();
+  for (size_t i = 0; i < tile.texels.size(); ++i) {
     if (entry && !std::isfinite(tile.entry_lower[i]))
       return fail("texel " + std::to_string(i) + " has an invalid entry-rule bound " +
                   std::to_string(tile.entry_lower[i]));

@@ -301,6 +301,13 @@ struct Box {
   double lo_u, hi_u, lo_v, hi_v;
   uint32_t x0, x1, y0, y1;  // the grid cells it touches
 };
+// A box as a cell lists it: copied into the cell's run, so the cell's pair loop reads its boxes in
+// order rather than through an index each.
+struct CellBox {
+  double lo_u, hi_u, lo_v, hi_v;
+  uint32_t k;       // index in `candidates`
+  uint32_t x0, y0;  // its first cell: a pair is visited in the cell of max(x0), max(y0)
+};
 
 }  // namespace
 
@@ -308,7 +315,8 @@ struct SecondLayerScratch::Buffers {
   std::vector<Prepared> prepared;
   std::vector<uint32_t> candidates;
   std::vector<Box> boxes;
-  std::vector<uint32_t> offsets, entries, fill;  // the pair grid's cells
+  std::vector<uint32_t> offsets, fill;  // the pair grid's cells
+  std::vector<CellBox> entries;
   std::vector<std::vector<float>> pyramid, lower_pyramid;
   std::vector<uint32_t> sides;
 };
@@ -358,23 +366,26 @@ void for_each_overlapping_pair(SecondLayerScratch::Buffers& scratch, const std::
       for (uint32_t x = box.x0; x <= box.x1; ++x) ++offsets[size_t(y) * cells + x + 1];
   }
   for (size_t c = 1; c < offsets.size(); ++c) offsets[c] += offsets[c - 1];
-  std::vector<uint32_t>& entries = scratch.entries;
+  std::vector<CellBox>& entries = scratch.entries;
   entries.resize(offsets.back());
   std::vector<uint32_t>& fill = scratch.fill;
   fill.assign(offsets.begin(), offsets.end() - 1);
-  for (uint32_t k = 0; k < boxes.size(); ++k)
-    for (uint32_t y = boxes[k].y0; y <= boxes[k].y1; ++y)
-      for (uint32_t x = boxes[k].x0; x <= boxes[k].x1; ++x) entries[fill[size_t(y) * cells + x]++] = k;
+  for (uint32_t k = 0; k < boxes.size(); ++k) {
+    const Box& b = boxes[k];
+    const CellBox entry{b.lo_u, b.hi_u, b.lo_v, b.hi_v, k, b.x0, b.y0};
+    for (uint32_t y = b.y0; y <= b.y1; ++y)
+      for (uint32_t x = b.x0; x <= b.x1; ++x) entries[fill[size_t(y) * cells + x]++] = entry;
+  }
   for (uint32_t y = 0; y < cells; ++y)
     for (uint32_t x = 0; x < cells; ++x) {
       const size_t c = size_t(y) * cells + x;
-      for (uint32_t m = offsets[c]; m < offsets[c + 1]; ++m) {
-        const Box& a = boxes[entries[m]];
-        for (uint32_t n = m + 1; n < offsets[c + 1]; ++n) {
-          const Box& b = boxes[entries[n]];
-          if (a.lo_u > b.hi_u || b.lo_u > a.hi_u || a.lo_v > b.hi_v || b.lo_v > a.hi_v) continue;
-          if (std::max(a.x0, b.x0) != x || std::max(a.y0, b.y0) != y) continue;  // cell_of is monotone
-          visit(candidates[entries[m]], candidates[entries[n]]);
+      const CellBox* const end = entries.data() + offsets[c + 1];
+      for (const CellBox* a = entries.data() + offsets[c]; a < end; ++a) {
+        const CellBox box = *a;  // a copy: visit() may write memory the compiler cannot rule out
+        for (const CellBox* b = a + 1; b < end; ++b) {
+          if (box.lo_u > b->hi_u || b->lo_u > box.hi_u || box.lo_v > b->hi_v || b->lo_v > box.hi_v) continue;
+          if (std::max(box.x0, b->x0) != x || std::max(box.y0, b->y0) != y) continue;  // cell_of is monotone
+          visit(candidates[box.k], candidates[b->k]);
         }
       }
     }
