@@ -68,6 +68,9 @@ const BatchItem* sort_low_bits(BatchItem* items, BatchItem* scratch, size_t n, u
 
 Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method, const BatchOptions& options,
                               BatchAnswers& out) const {
+  // After an error the answers are empty, not the last batch's or a part of this one's.
+  out.lit.clear();
+  out.outside.clear();
   const unsigned kernel = options.kernel;
   if (kernel == 0 || kernel % 2 == 0 || kernel > kMaxPcfKernel)
     return make_error(ErrorCode::invalid_input,
@@ -86,11 +89,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   const bool coarse = level && *level < layout_.tile_level() && top_trees_.count(method);
 
   const size_t n = points.size();
-  out.outside.clear();
-  if (n == 0) {
-    out.lit.clear();
-    return {};
-  }
+  if (n == 0) return {};
   // Points: bytes first (lit unless the walk says otherwise), floats at the end. PCF: floats.
   if (kernel == 1) {
     out.lit.resize(n);
@@ -205,7 +204,10 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
       }
     }
   });
-  if (first_error) return *first_error;
+  if (first_error) {
+    out.lit.clear();  // no answers rather than some (see the top)
+    return *first_error;
+  }
   // Offsets: bucket-major, chunk-minor, so the scatter is stable. Computed chunk by chunk, along
   // the histogram's rows in memory (bucket by bucket strode 16 kB per step).
   std::vector<uint32_t> bucket_start(buckets + 2, 0);
@@ -332,7 +334,10 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
       }
     }
   });
-  if (first_error) return *first_error;
+  if (first_error) {
+    out.lit.clear();  // no answers rather than some (see the top)
+    return *first_error;
+  }
   // The point answers' bytes to floats, in the callers' order (the walk wrote them in the sort's).
   if (kernel == 1)
     claim_chunks([&](size_t c0, size_t c1) {

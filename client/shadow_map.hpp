@@ -111,7 +111,8 @@ class ShadowMap {
   // points off the map (lit), ascending. Points are sorted by tile and along the Morton curve inside
   // it, each tile is looked up once per run of its points, runs walk down a shared path (each point
   // resumes from the deepest node it shares with the previous one), and the work is split across
-  // `threads`. Errors: those of query() / query_pcf() (the first one fails the whole batch).
+  // `threads`. Errors: those of query() / query_pcf() (the first one fails the whole batch, and
+  // leaves out.lit and out.outside empty).
   struct BatchOptions {
     unsigned kernel = 1;  // 1: point query; odd k: PCF k x k
     std::optional<double> bias;
@@ -130,9 +131,9 @@ class ShadowMap {
   struct BatchAnswers {
     std::vector<float> lit;
     std::vector<uint32_t> outside;
-    // The sort's buffers (32 bytes per point of the largest batch so far, plus its histograms), kept
-    // for the next batch answered into these answers: reusing one BatchAnswers for repeated batches
-    // skips re-allocating them (zero-filled fresh pages: ~8,000 page faults per 1M-point batch).
+    // The sort's buffers (32 bytes per point of the largest batch so far, plus its histograms, and
+    // lit_bytes' 1 byte per point), kept for the next batch answered into these answers: reusing
+    // one BatchAnswers for repeated batches skips re-allocating them (zero-filled fresh pages: ~8,000 page faults per 1M-point batch).
     // Drop the answers (or assign `sort_items = {}` and clear the histogram) to free that memory.
     // The items in 2 MiB pages where the kernel allows: the sort's scatter writes to 4,096 buckets
     // at once, a page each with 4 KiB pages, which the TLB cannot hold (fzk_haus 16384², 1M points,
@@ -140,7 +141,8 @@ class ShadowMap {
     HugePageArray<BatchSortItem> sort_items;
     std::vector<uint32_t> sort_histogram;
     // Point answers as bytes (1 lit, 0 shadowed) before they become `lit`'s floats: the walk writes
-    // them in the sort's order, so to random places, and a quarter of the lines miss less.
+    // them in the sort's order, so to random places, and bytes spread those writes over a quarter
+    // of the cache lines floats would.
     std::vector<uint8_t> lit_bytes;
   };
   Status query_batch(std::span<const Vec3> points, store::Method method, const BatchOptions& options,

@@ -170,10 +170,14 @@ TEST_F(ShadowMapBatchTest, BadBatchesAreErrors) {
   std::vector<Vec3> points(points_->begin(), points_->begin() + 100);
   EXPECT_TRUE(m.query_batch({}, store::Method::mh, {}, answers).ok());
   EXPECT_TRUE(answers.lit.empty());
+  // A failed batch leaves no answers: not the last batch's, nor a part of its own.
+  ASSERT_TRUE(m.query_batch(points, store::Method::mh, {}, answers).ok());
+  ASSERT_EQ(answers.lit.size(), points.size());
   points[57] = {0, NAN, 0};
   auto bad = m.query_batch(points, store::Method::mh, {}, answers);
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().code, ErrorCode::invalid_input);
+  EXPECT_TRUE(answers.lit.empty());
   // Infinite coordinates too, on every axis and both signs (the batch checks finiteness only for
   // points its transform puts off the map, which every such point is).
   for (int axis = 0; axis < 3; ++axis)
@@ -187,7 +191,9 @@ TEST_F(ShadowMapBatchTest, BadBatchesAreErrors) {
   points[57] = (*points_)[0];
   ShadowMap::BatchOptions options;
   options.kernel = 4;
+  ASSERT_TRUE(m.query_batch(points, store::Method::mh, {}, answers).ok());
   EXPECT_EQ(m.query_batch(points, store::Method::mh, options, answers).error().code, ErrorCode::invalid_input);
+  EXPECT_TRUE(answers.lit.empty());
   options.kernel = 1;
   options.bias = -1.0;
   EXPECT_EQ(m.query_batch(points, store::Method::mh, options, answers).error().code, ErrorCode::invalid_input);
