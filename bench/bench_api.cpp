@@ -105,6 +105,9 @@ int run(int argc, char** argv) {
       // BATCH_REPEATS: more batches per rate, for `perf record` of the batch path alone.
       const char* repeats_env = std::getenv("BATCH_REPEATS");
       const int batch_repeats = repeats_env ? std::max(1, std::atoi(repeats_env)) : 5;
+      // BATCH_SPLIT=k: the same points as k batches one after the other (how density matters).
+      const char* split_env = std::getenv("BATCH_SPLIT");
+      const size_t split = size_t(split_env ? std::max(1, std::atoi(split_env)) : 1);
       // MODES batch1: point batches only (for `perf record` of that path).
       for (unsigned kernel : {1u, 3u}) {
         if (kernel != 1 && !has_mode("batch")) continue;
@@ -117,8 +120,6 @@ int run(int argc, char** argv) {
           double best = 0;
           for (int repeat = 0; repeat < batch_repeats; ++repeat) {
             const auto start = std::chrono::steady_clock::now();
-            // BATCH_SPLIT=k: the same points as k batches one after the other (how density matters).
-            static const size_t split = std::max(1, std::getenv("BATCH_SPLIT") ? std::atoi(std::getenv("BATCH_SPLIT")) : 1);
             for (size_t part = 0; part < split; ++part) {
               const size_t a = random.size() * part / split, b = random.size() * (part + 1) / split;
               if (Status s = m.query_batch(std::span<const Vec3>(random).subspan(a, b - a), *method, batch, answers); !s) {

@@ -110,6 +110,12 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
     if (!first_error) first_error = std::move(e);
     failed = true;
   };
+  // The batch's error, with no answers left behind (see the top).
+  auto batch_error = [&]() -> Status {
+    out.lit.clear();
+    out.outside.clear();
+    return *first_error;
+  };
 
   const unsigned key_bits = 2 * unsigned(std::countr_zero(layout_.resolution()));
   const unsigned bucket_bits = std::min(key_bits, kBucketBits);
@@ -204,10 +210,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
       }
     }
   });
-  if (first_error) {
-    out.lit.clear();  // no answers rather than some (see the top)
-    return *first_error;
-  }
+  if (first_error) return batch_error();
   // Offsets: bucket-major, chunk-minor, so the scatter is stable. Computed chunk by chunk, along
   // the histogram's rows in memory (bucket by bucket strode 16 kB per step).
   std::vector<uint32_t> bucket_start(buckets + 2, 0);
@@ -334,10 +337,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
       }
     }
   });
-  if (first_error) {
-    out.lit.clear();  // no answers rather than some (see the top)
-    return *first_error;
-  }
+  if (first_error) return batch_error();
   // The point answers' bytes to floats, in the callers' order (the walk wrote them in the sort's).
   if (kernel == 1)
     claim_chunks([&](size_t c0, size_t c1) {

@@ -133,7 +133,8 @@ class ShadowMap {
     std::vector<uint32_t> outside;
     // The sort's buffers (32 bytes per point of the largest batch so far, plus its histograms, and
     // lit_bytes' 1 byte per point), kept for the next batch answered into these answers: reusing
-    // one BatchAnswers for repeated batches skips re-allocating them (zero-filled fresh pages: ~8,000 page faults per 1M-point batch).
+    // one BatchAnswers for repeated batches skips re-allocating them (zero-filled fresh pages:
+    // ~8,000 page faults per 1M-point batch).
     // Drop the answers (or assign `sort_items = {}` and clear the histogram) to free that memory.
     // The items in 2 MiB pages where the kernel allows: the sort's scatter writes to 4,096 buckets
     // at once, a page each with 4 KiB pages, which the TLB cannot hold (fzk_haus 16384², 1M points,

@@ -178,6 +178,7 @@ TEST_F(ShadowMapBatchTest, BadBatchesAreErrors) {
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().code, ErrorCode::invalid_input);
   EXPECT_TRUE(answers.lit.empty());
+  EXPECT_TRUE(answers.outside.empty());
   // Infinite coordinates too, on every axis and both signs (the batch checks finiteness only for
   // points its transform puts off the map, which every such point is).
   for (int axis = 0; axis < 3; ++axis)
