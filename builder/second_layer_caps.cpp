@@ -9,6 +9,7 @@
 #include <span>
 #include <utility>
 
+#include "builder/overlapping_box_pairs.hpp"
 #include "builder/second_layer_rule.hpp"
 
 namespace shadowtiles {
@@ -297,26 +298,12 @@ void lower_caps_above_floor(const Polygon& region, const TexelWindow& window, co
   }
 }
 
-struct Box {
-  double lo_u, hi_u, lo_v, hi_v;
-  uint32_t x0, x1, y0, y1;  // the grid cells it touches
-};
-// A box as a cell lists it: copied into the cell's run, so the cell's pair loop reads its boxes in
-// order rather than through an index each.
-struct CellBox {
-  double lo_u, hi_u, lo_v, hi_v;
-  uint32_t k;       // index in `candidates`
-  uint32_t x0, y0;  // its first cell: a pair is visited in the cell of max(x0), max(y0)
-};
-
 }  // namespace
 
 struct SecondLayerScratch::Buffers {
   std::vector<Prepared> prepared;
   std::vector<uint32_t> candidates;
-  std::vector<Box> boxes;
-  std::vector<uint32_t> offsets, fill;  // the pair grid's cells
-  std::vector<CellBox> entries;
+  OverlappingBoxPairsScratch pair_grid;
   std::vector<std::vector<float>> pyramid, lower_pyramid;
   std::vector<uint32_t> sides;
 };
@@ -330,68 +317,6 @@ SecondLayerScratch::~SecondLayerScratch() = default;
 SecondLayerScratch::SecondLayerScratch(SecondLayerScratch&&) noexcept = default;
 SecondLayerScratch& SecondLayerScratch::operator=(SecondLayerScratch&&) noexcept = default;
 
-namespace {
-
-// Calls visit(i, j) once for every pair of `candidates` whose footprint boxes, padded by 1/256 texel
-// for rounding, overlap. A uniform grid over the tile lists each box in the cells it touches; a pair
-// is visited in the one cell holding the corner (max lo_u, max lo_v) of the boxes' overlap. Pairs
-// are handled as they are found (no list of them: tens of millions on a city tile), on this thread.
-template <class Visit>
-void for_each_overlapping_pair(SecondLayerScratch::Buffers& scratch, const std::vector<Prepared>& prepared,
-                               const std::vector<uint32_t>& candidates,
-                               const TexelWindow& window, Visit visit) {
-  if (candidates.size() < 2) return;
-  constexpr double kPad = 1.0 / 256;
-  std::vector<Box>& boxes = scratch.boxes;
-  boxes.resize(candidates.size());
-  double extent = 0;
-  for (size_t k = 0; k < candidates.size(); ++k) {
-    const Prepared& t = prepared[candidates[k]];
-    const double u = window.u0, v = window.v0;
-    boxes[k] = {t.lo_u - u - kPad, t.hi_u - u + kPad, t.lo_v - v - kPad, t.hi_v - v + kPad, 0, 0, 0, 0};
-    extent += std::min(boxes[k].hi_u - boxes[k].lo_u, double(window.size)) +
-              std::min(boxes[k].hi_v - boxes[k].lo_v, double(window.size));
-  }
-  // Cells about twice the mean box side: each box touches a few cells, each cell holds few boxes.
-  const double mean_side = extent / (2.0 * double(candidates.size()));
-  const uint32_t cell = uint32_t(std::clamp(std::bit_ceil(uint32_t(std::ceil(2 * mean_side))), 4u, 256u));
-  const uint32_t cells = std::max(1u, (window.size + cell - 1) / cell);
-  auto cell_of = [&](double at) { return uint32_t(std::clamp(std::floor(at / cell), 0.0, double(cells - 1))); };
-  // The cells' lists, packed (counts, then offsets, then entries).
-  std::vector<uint32_t>& offsets = scratch.offsets;
-  offsets.assign(size_t(cells) * cells + 1, 0);
-  for (Box& box : boxes) {
-    box.x0 = cell_of(box.lo_u), box.x1 = cell_of(box.hi_u), box.y0 = cell_of(box.lo_v), box.y1 = cell_of(box.hi_v);
-    for (uint32_t y = box.y0; y <= box.y1; ++y)
-      for (uint32_t x = box.x0; x <= box.x1; ++x) ++offsets[size_t(y) * cells + x + 1];
-  }
-  for (size_t c = 1; c < offsets.size(); ++c) offsets[c] += offsets[c - 1];
-  std::vector<CellBox>& entries = scratch.entries;
-  entries.resize(offsets.back());
-  std::vector<uint32_t>& fill = scratch.fill;
-  fill.assign(offsets.begin(), offsets.end() - 1);
-  for (uint32_t k = 0; k < boxes.size(); ++k) {
-    const Box& b = boxes[k];
-    const CellBox entry{b.lo_u, b.hi_u, b.lo_v, b.hi_v, k, b.x0, b.y0};
-    for (uint32_t y = b.y0; y <= b.y1; ++y)
-      for (uint32_t x = b.x0; x <= b.x1; ++x) entries[fill[size_t(y) * cells + x]++] = entry;
-  }
-  for (uint32_t y = 0; y < cells; ++y)
-    for (uint32_t x = 0; x < cells; ++x) {
-      const size_t c = size_t(y) * cells + x;
-      const CellBox* const end = entries.data() + offsets[c + 1];
-      for (const CellBox* a = entries.data() + offsets[c]; a < end; ++a) {
-        const CellBox box = *a;  // a copy: visit() may write memory the compiler cannot rule out
-        for (const CellBox* b = a + 1; b < end; ++b) {
-          if (box.lo_u > b->hi_u || b->lo_u > box.hi_u || box.lo_v > b->hi_v || b->lo_v > box.hi_v) continue;
-          if (std::max(box.x0, b->x0) != x || std::max(box.y0, b->y0) != y) continue;  // cell_of is monotone
-          visit(candidates[box.k], candidates[b->k]);
-        }
-      }
-    }
-}
-
-}  // namespace
 
 std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
                                      const TileIntervals& intervals, float exit_margin, SecondLayerCapCounts* counts,
@@ -587,7 +512,7 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
     }
   };
   if (pyramid[sides.size() - 1][0] == kNothing) candidates.clear();  // no exit in the tile: nothing to cap
-  for_each_overlapping_pair(buffers, prepared, candidates, window, [&](uint32_t i, uint32_t j) {
+  for_each_overlapping_pair(buffers.pair_grid, prepared, candidates, window, [&](uint32_t i, uint32_t j) {
     lower_by_region(prepared[i], prepared[j]);
     lower_by_region(prepared[j], prepared[i]);
   });
