@@ -1,7 +1,7 @@
 // ShadowMap::query_batch on a real store with every method: each batch answer equals the
 // single-point answer (query / query_pcf) exactly, for every method, PCF kernels 1..63, points on
 // tile borders and off the map, coarse levels, shuffled orders, 1 or 2 threads or a caller's pool;
-// bad batches are errors.
+// bad batches are errors, and so is a batch that meets a corrupt tile in the middle of its walks.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,7 +12,9 @@
 #include "builder/receiver_sampler.hpp"
 #include "builder/scene_loader.hpp"
 #include "client/shadow_map.hpp"
+#include "codec/morton.hpp"
 #include "tests/scene_build_config.hpp"
+#include "tests/store_damage.hpp"
 #include "tests/testing_support.hpp"
 
 namespace shadowtiles {
@@ -204,6 +206,57 @@ TEST_F(ShadowMapBatchTest, BadBatchesAreErrors) {
   options.level = {};
   EXPECT_TRUE(m.query_batch(points, store::Method::mh, options, answers).ok());
   EXPECT_EQ(answers.lit.size(), points.size());
+}
+
+// A tile whose stored blob fails its checksum, met by the walks after other tiles were answered and
+// the points off the map were listed: the batch is corrupt_data, with neither answers nor the
+// outside list left behind, and no answer of the damaged method is served from that tile later.
+TEST_F(ShadowMapBatchTest, ACorruptTileMidBatchIsAnErrorWithNoAnswers) {
+  testing::TempDir dir;
+  const auto damaged = dir.path() / "damaged.store";
+  std::filesystem::copy(store(), damaged, std::filesystem::copy_options::recursive);
+  TileCoord target{};
+  {
+    auto clean = ShadowMap::open(store());
+    ASSERT_TRUE(clean.ok());
+    const ShadowMap& m = **clean;
+    // Of the stored MH tiles holding points, the last in Morton order, the order the walks take:
+    // the points in the tiles before it are answered first.
+    std::optional<TileCoord> tile;
+    size_t stored_tiles = 0;
+    for (const Vec3& p : *points_) {
+      auto t = m.tile_of(p);
+      if (!t || (tile && morton_encode(t->x, t->y) <= morton_encode(tile->x, tile->y))) continue;
+      auto decoded = m.tile(store::Method::mh, *t);
+      ASSERT_TRUE(decoded.ok());
+      if (*decoded) tile = t, ++stored_tiles;
+    }
+    ASSERT_TRUE(tile.has_value());
+    ASSERT_GT(stored_tiles, 2u) << "stored tiles met in rising Morton order: at least two come before the target";
+    target = *tile;
+    testing::flip_a_bit_in_stored_tile(damaged, {store::Method::mh, m.layout().tile_level(), target.x, target.y});
+  }
+  auto map = ShadowMap::open(damaged);
+  ASSERT_TRUE(map.ok());
+  const ShadowMap& m = **map;
+  for (unsigned kernel : {1u, 3u}) {
+    ShadowMap::BatchAnswers answers;
+    ShadowMap::BatchOptions options;
+    options.kernel = kernel;
+    options.threads = 1;  // one worker: the tiles before the damaged one are answered first
+    // The same answers object held a whole batch of another method a moment ago.
+    ASSERT_TRUE(m.query_batch(*points_, store::Method::raw, options, answers).ok());
+    ASSERT_FALSE(answers.outside.empty()) << "the points include some off the map";
+    auto batch = m.query_batch(*points_, store::Method::mh, options, answers);
+    ASSERT_FALSE(batch.ok()) << "kernel " << kernel;
+    EXPECT_EQ(batch.error().code, ErrorCode::corrupt_data) << batch.error().message;
+    EXPECT_TRUE(answers.lit.empty()) << "kernel " << kernel;
+    EXPECT_TRUE(answers.outside.empty()) << "kernel " << kernel;
+  }
+  // Another method's tiles at the same place still answer.
+  ShadowMap::BatchAnswers answers;
+  EXPECT_TRUE(m.query_batch(*points_, store::Method::dagmh, {}, answers).ok());
+  EXPECT_EQ(answers.lit.size(), points_->size());
 }
 
 }  // namespace
