@@ -253,7 +253,17 @@ TEST_F(ShadowMapBatchTest, ACorruptTileMidBatchIsAnErrorWithNoAnswers) {
     EXPECT_TRUE(answers.lit.empty()) << "kernel " << kernel;
     EXPECT_TRUE(answers.outside.empty()) << "kernel " << kernel;
   }
-  // Another method's tiles at the same place still answer.
+  // A later single query in the damaged tile is the same error, not an answer; another method's
+  // tiles at the same place still answer.
+  auto in_target = std::find_if(points_->begin(), points_->end(), [&](const Vec3& p) {
+    auto t = m.tile_of(p);
+    return t && t->x == target.x && t->y == target.y;
+  });
+  ASSERT_NE(in_target, points_->end());
+  auto single = m.query(*in_target, store::Method::mh);
+  ASSERT_FALSE(single.ok());
+  EXPECT_EQ(single.error().code, ErrorCode::corrupt_data);
+  EXPECT_TRUE(m.query(*in_target, store::Method::dagmh).ok());
   ShadowMap::BatchAnswers answers;
   EXPECT_TRUE(m.query_batch(*points_, store::Method::dagmh, {}, answers).ok());
   EXPECT_EQ(answers.lit.size(), points_->size());
