@@ -145,6 +145,15 @@ nlohmann::json plan_json(const std::vector<ShardRange>& plan) {
   return shards;
 }
 
+// The cap pass's counts summed over this run's tiles (pairs and regions are `surfaces`' only).
+nlohmann::json cap_pass_json(const SecondLayerCapCounts& caps) {
+  const ReceiverCapCounts& t = caps.texels;
+  return {{"pairs_tested", caps.pairs_tested}, {"regions", caps.regions}, {"near_regions", caps.near_regions},
+          {"skipped", caps.skipped},
+          {"texels", {{"clipped", t.clipped}, {"interior", t.interior}, {"fallback", t.fallback},
+                      {"already_lower", t.already_lower}, {"corner", t.corner}, {"chord", t.chord}}}};
+}
+
 std::string shard_name(const std::optional<ShardInfo>& shard) {
   return shard ? "shard " + std::to_string(shard->index) + "/" + std::to_string(shard->count) : "a whole build";
 }
@@ -438,6 +447,8 @@ BuildSummary summarize(const PreparedBuild& build, const TileIndex& index, const
       {"rays", summary.rays},
       {"hit_texels", totals.depth.hits},   // texels some geometry covers (this run's tiles)
       {"exit_texels", totals.depth.exits}, // texels with a real exit (upper > lower)
+      // The cap pass's work (builder/second_layer_caps.hpp): where its time goes (docs/build-time.md).
+      {"caps", cap_pass_json(totals.depth.caps)},
       {"rays_per_second", times.render_wall > 0 ? double(summary.rays) / times.render_wall : 0.0},
       // Ray casting alone (BVH build excluded), per worker thread.
       {"rays_per_thread_second",

@@ -188,6 +188,7 @@ void DualDepthStats::add(const DualDepthStats& other) {
   ray_seconds += other.ray_seconds;
   cap_seconds += other.cap_seconds;
   entry_seconds += other.entry_seconds;
+  caps.add(other.caps);
 }
 
 DualDepthRenderer::DualDepthRenderer(const EmbreeDevice& device, const LightSpaceScene& scene,
@@ -338,8 +339,8 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
     std::vector<float> caps =
         options_.receivers == ReceiverContract::surfaces
             ? second_layer_caps(scene_, tile, options_.coplanar_epsilon, *intervals, options_.exit_margin,
-                                nullptr, std::move(storage), buffers ? &buffers->second_layer : nullptr)
-            : receiver_surface_caps(scene_, tile, nullptr, std::move(storage));
+                                &local.caps, std::move(storage), buffers ? &buffers->second_layer : nullptr)
+            : receiver_surface_caps(scene_, tile, &local.caps.texels, std::move(storage));
     apply_exit_caps(*intervals, caps, options_.exit_margin);
     if (buffers) buffers->caps = std::move(caps);
   }

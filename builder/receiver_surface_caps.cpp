@@ -313,12 +313,7 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
     local.clipped += (span_last - span_first + 1) - (in_end - in_first);
   }
   if (counts) {
-    counts->clipped += local.clipped;
-    counts->interior += local.interior;
-    counts->fallback += local.fallback;
-    counts->already_lower += local.already_lower;
-    counts->corner += local.corner;
-    counts->chord += local.chord;
+    counts->add(local);
   }
 }
 

@@ -35,6 +35,11 @@ struct ReceiverCapCounts {
   uint64_t corner = 0;         // of those to clip (counted in `clipped`), texels whose shallowest
                                // square corner lies inside the triangle: closed form, unclipped
   uint64_t chord = 0;          // ... crossed by one edge only, that corner outside: the edge's chord
+
+  void add(const ReceiverCapCounts& other) {
+    clipped += other.clipped, interior += other.interior, fallback += other.fallback;
+    already_lower += other.already_lower, corner += other.corner, chord += other.chord;
+  }
 };
 
 // A square window of texels: texel (i, j) covers global texels [u0 + i, u0 + i + 1] x [v0 + j, ...].

@@ -516,15 +516,7 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
     lower_by_region(prepared[i], prepared[j]);
     lower_by_region(prepared[j], prepared[i]);
   });
-  if (counts) {
-    counts->pairs_tested += local.pairs_tested;
-    counts->regions += local.regions;
-    counts->skipped += local.skipped;
-    counts->near_regions += local.near_regions;
-    counts->texels.clipped += local.texels.clipped;
-    counts->texels.interior += local.texels.interior;
-    counts->texels.fallback += local.texels.fallback;
-  }
+  if (counts) counts->add(local);
   return cap;
 }
 

@@ -43,6 +43,12 @@ struct SecondLayerCapCounts {
   uint64_t skipped = 0;        // pairs or regions that could not change a capped interval (pairs
                                // apart across an edge are counted in neither)
   ReceiverCapCounts texels;    // how the regions' texels were resolved
+
+  void add(const SecondLayerCapCounts& other) {
+    pairs_tested += other.pairs_tested, regions += other.regions, near_regions += other.near_regions;
+    skipped += other.skipped;
+    texels.add(other.texels);
+  }
 };
 
 // Working buffers second_layer_caps keeps between tiles: on a city or terrain tile they hold about

@@ -285,14 +285,26 @@ TEST(Cli, DefaultBuildStoresDagmhRecordsUpAxisAndHintsAtOpenMeshes) {
   ASSERT_TRUE(map.ok());
   EXPECT_EQ((*map)->meta().methods, std::vector<store::Method>{store::Method::dagmh});
   EXPECT_EQ((*map)->meta().up_axis, "y");
+  // Under `anywhere` the cap pass settles texels but looks at no pairs.
+  EXPECT_EQ(stats["caps"]["pairs_tested"].get<uint64_t>(), 0u);
+  EXPECT_GT(stats["caps"]["texels"]["clipped"].get<uint64_t>() + stats["caps"]["texels"]["interior"].get<uint64_t>(), 0u);
   // Under surfaces the open meshes already get intervals: no hint.
   output.clear();
   ASSERT_EQ(testing::run_command(testing::cli_path().string() + " build " + scene + " --up y -r 512 --tile 256 --out " +
-                                     (dir.path() / "surfaces").string() + " --receivers surfaces",
+                                     (dir.path() / "surfaces").string() + " --receivers surfaces --json",
                                  &output),
             0)
       << output;
   EXPECT_EQ(output.find("open meshes"), std::string::npos) << output;
+  // The cap pass's work is recorded (docs/build-time.md counts it to find where the pass's time goes):
+  // the bunny's folds put surfaces behind surfaces, so pairs are tested and regions found.
+  stats = nlohmann::json::parse(output.substr(output.find('{')));
+  const auto& caps = stats["caps"];
+  EXPECT_GT(caps["pairs_tested"].get<uint64_t>(), 0u) << caps.dump();
+  EXPECT_GT(caps["regions"].get<uint64_t>(), 0u) << caps.dump();
+  EXPECT_LE(caps["regions"].get<uint64_t>() + caps["near_regions"].get<uint64_t>(), caps["pairs_tested"].get<uint64_t>() * 2)
+      << caps.dump();
+  EXPECT_GT(caps["texels"]["clipped"].get<uint64_t>(), 0u) << caps.dump();
 }
 
 // Without --tile a build cuts the map into 2048^2 tiles (docs/build-time.md: faster builds, a third of
