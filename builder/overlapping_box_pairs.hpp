@@ -59,9 +59,31 @@ void for_each_overlapping_pair(OverlappingBoxPairsScratch& scratch, const std::v
               std::min(boxes[k].hi_v - boxes[k].lo_v, double(window.size));
   }
   // Cells about twice the mean box side: each box touches a few cells, each cell holds few boxes.
-  const double mean_side = extent / (2.0 * double(candidates.size()));
-  const uint32_t cell = uint32_t(std::clamp(std::bit_ceil(uint32_t(std::ceil(2 * mean_side))), 4u, 256u));
-  const uint32_t cells = std::max(1u, (window.size + cell - 1) / cell);
+  // A power of two of texels, 4 to 256 where triangles are a texel or more across. Below that the
+  // cells go finer, down to 1/64 texel and at most kFineCells a side, since a dense mesh on a coarse
+  // map crowds them (oahu's 490k triangles on one 64^2 tile put ~2,000 boxes in each 4-texel cell:
+  // ~460 million box tests, 17 s), but coarser again while the boxes would make more than
+  // kEntriesPerBox entries each (a few huge ground triangles over a fine grid).
+  const size_t n = candidates.size();
+  const double mean_side = extent / (2.0 * double(n));
+  double cell;
+  if (2 * mean_side >= 2) {
+    cell = double(std::clamp(std::bit_ceil(uint32_t(std::ceil(2 * mean_side))), 4u, 256u));
+  } else {
+    constexpr double kFineCells = 1024;
+    constexpr size_t kEntriesPerBox = 8;
+    const double finest = std::max(1.0 / 64, double(window.size) / kFineCells);
+    cell = std::clamp(std::exp2(std::ceil(std::log2(std::max(2 * mean_side, 1.0 / 64)))), finest, 4.0);
+    auto entries_at = [&](double size) {  // as the lists below will hold them (clamped to the tile)
+      const double last = std::max(1.0, std::ceil(double(window.size) / size)) - 1;
+      auto index = [&](double at) { return std::clamp(std::floor(at / size), 0.0, last); };
+      double total = 0;
+      for (const Box& b : boxes) total += (index(b.hi_u) - index(b.lo_u) + 1) * (index(b.hi_v) - index(b.lo_v) + 1);
+      return total;
+    };
+    while (cell < 4 && entries_at(cell) > double(kEntriesPerBox * n)) cell *= 2;
+  }
+  const uint32_t cells = uint32_t(std::max(1.0, std::ceil(double(window.size) / cell)));
   auto cell_of = [&](double at) { return uint32_t(std::clamp(std::floor(at / cell), 0.0, double(cells - 1))); };
   // The cells' lists, packed (counts, then offsets, then entries).
   std::vector<uint32_t>& offsets = scratch.offsets;
