@@ -72,7 +72,8 @@ void for_each_overlapping_pair(OverlappingBoxPairsScratch& scratch, const std::v
   } else {
     constexpr double kFineCells = 1024;
     constexpr size_t kEntriesPerBox = 8;
-    const double finest = std::max(1.0 / 64, double(window.size) / kFineCells);
+    // (Tiles over 4096 texels wide never reach below 4 texels: kFineCells bounds them first.)
+    const double finest = std::min(4.0, std::max(1.0 / 64, double(window.size) / kFineCells));
     cell = std::clamp(std::exp2(std::ceil(std::log2(std::max(2 * mean_side, 1.0 / 64)))), finest, 4.0);
     auto entries_at = [&](double size) {  // as the lists below will hold them (clamped to the tile)
       const double last = std::max(1.0, std::ceil(double(window.size) / size)) - 1;

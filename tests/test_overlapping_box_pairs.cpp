@@ -3,7 +3,7 @@
 // brute-force check of all pairs. Mixes of box sizes reach each way the grid sizes its cells:
 // boxes a texel or more across (cells of 4-256 texels), boxes far smaller than a texel (finer cells,
 // down to 1/64 texel), and those with a few boxes as large as the tile (cells coarsened so the
-// lists stay short), on a 64^2 and a 2048^2 window off the origin.
+// lists stay short), on windows of 64^2 to 8192^2 texels off the origin.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -72,9 +72,12 @@ TEST(OverlappingBoxPairs, BoxesFarSmallerThanATexel) {
   // ~30 boxes per texel on the small window: the finest cells.
   const TexelWindow small{128, 64, 64};
   expect_every_overlapping_pair_once(random_boxes(small, 3000, 0.001, 0.05, 7), small);
-  // The same density in a corner of a large window, whose other cells stay empty.
+  // The same density in a corner of a large window, whose other cells stay empty; and on a window
+  // wider than 4096 texels, whose cells stay at 4 texels (1,024 a side would be coarser).
   const TexelWindow large{0, 0, 2048};
   expect_every_overlapping_pair_once(random_boxes(large, 3000, 0.01, 0.5, 8, 24), large);
+  const TexelWindow widest{-8192, 0, 8192};
+  expect_every_overlapping_pair_once(random_boxes(widest, 3000, 0.01, 0.5, 11, 24), widest);
 }
 
 TEST(OverlappingBoxPairs, TinyBoxesWithAFewAsLargeAsTheTile) {
