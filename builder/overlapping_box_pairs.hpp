@@ -66,6 +66,12 @@ void for_each_overlapping_pair(OverlappingBoxPairsScratch& scratch, const std::v
   // kEntriesPerBox entries each (a few huge ground triangles over a fine grid).
   const size_t n = candidates.size();
   const double mean_side = extent / (2.0 * double(n));
+  // Cells a side for cells of `size` texels, and the cell of coordinate `at` (clamped: boxes reach
+  // past the tile); the estimate below and the lists share them.
+  auto cells_for = [&](double size) { return uint32_t(std::max(1.0, std::ceil(double(window.size) / size))); };
+  auto index_of = [](double at, double size, uint32_t cells) {
+    return uint32_t(std::clamp(std::floor(at / size), 0.0, double(cells - 1)));
+  };
   double cell;
   if (2 * mean_side >= 2) {
     cell = double(std::clamp(std::bit_ceil(uint32_t(std::ceil(2 * mean_side))), 4u, 256u));
@@ -75,17 +81,18 @@ void for_each_overlapping_pair(OverlappingBoxPairsScratch& scratch, const std::v
     // (Tiles over 4096 texels wide never reach below 4 texels: kFineCells bounds them first.)
     const double finest = std::min(4.0, std::max(1.0 / 64, double(window.size) / kFineCells));
     cell = std::clamp(std::exp2(std::ceil(std::log2(std::max(2 * mean_side, 1.0 / 64)))), finest, 4.0);
-    auto entries_at = [&](double size) {  // as the lists below will hold them (clamped to the tile)
-      const double last = std::max(1.0, std::ceil(double(window.size) / size)) - 1;
-      auto index = [&](double at) { return std::clamp(std::floor(at / size), 0.0, last); };
-      double total = 0;
-      for (const Box& b : boxes) total += (index(b.hi_u) - index(b.lo_u) + 1) * (index(b.hi_v) - index(b.lo_v) + 1);
+    auto entries_at = [&](double size) {  // as the lists below will hold them
+      const uint32_t side = cells_for(size);
+      size_t total = 0;
+      for (const Box& b : boxes)
+        total += size_t(index_of(b.hi_u, size, side) - index_of(b.lo_u, size, side) + 1) *
+                 (index_of(b.hi_v, size, side) - index_of(b.lo_v, size, side) + 1);
       return total;
     };
-    while (cell < 4 && entries_at(cell) > double(kEntriesPerBox * n)) cell *= 2;
+    while (cell < 4 && entries_at(cell) > kEntriesPerBox * n) cell *= 2;
   }
-  const uint32_t cells = uint32_t(std::max(1.0, std::ceil(double(window.size) / cell)));
-  auto cell_of = [&](double at) { return uint32_t(std::clamp(std::floor(at / cell), 0.0, double(cells - 1))); };
+  const uint32_t cells = cells_for(cell);
+  auto cell_of = [&](double at) { return index_of(at, cell, cells); };
   // The cells' lists, packed (counts, then offsets, then entries).
   std::vector<uint32_t>& offsets = scratch.offsets;
   offsets.assign(size_t(cells) * cells + 1, 0);
