@@ -553,7 +553,10 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
     nlohmann::json costs = nlohmann::json::array();
     for (const TileCost& c : tiles->costs)
       costs.push_back({{"morton", TileLayout::morton_index(c.tile)}, {"cpu_seconds", c.cpu_seconds},
-                       {"wall_seconds", c.wall_seconds}, {"hit_texels", c.hit_texels}, {"blob_bytes", c.blob_bytes}});
+                       {"wall_seconds", c.wall_seconds}, {"hit_texels", c.hit_texels}, {"blob_bytes", c.blob_bytes},
+                       {"triangles", c.triangles},
+                       {"seconds", {{"bvh", c.bvh_seconds}, {"rays", c.ray_seconds}, {"entry_rule", c.entry_seconds},
+                                    {"caps", c.cap_seconds}, {"encode", c.encode_seconds}}}});
     summary.stats["tile_costs"] = std::move(costs);
   }
   return summary;

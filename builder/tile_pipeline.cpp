@@ -128,6 +128,8 @@ Result<TilePipelineResult> run_tile_pipeline(const TilePipelineInput& input, con
       const double cpu_start = thread_cpu_seconds();
       const auto wall_start = Clock::now();
       const uint64_t hits_before = mine.depth.hits, bytes_before = mine.blob_bytes;
+      const DualDepthStats depth_before = mine.depth;
+      const double encode_before = mine.encode_seconds;
       std::vector<store::Store::Put> puts;
       DepthInterval root;
       if (Status s = process_tile(input, tile, mine, rays_done, puts, root, buffers); !s) {
@@ -140,8 +142,14 @@ Result<TilePipelineResult> run_tile_pipeline(const TilePipelineInput& input, con
         break;
       }
       mine.store_seconds += seconds_since(store_start);
-      const TileCost cost{tile, thread_cpu_seconds() - cpu_start, seconds_since(wall_start),
-                          mine.depth.hits - hits_before, mine.blob_bytes - bytes_before};
+      TileCost cost{tile, thread_cpu_seconds() - cpu_start, seconds_since(wall_start),
+                    mine.depth.hits - hits_before, mine.blob_bytes - bytes_before};
+      cost.bvh_seconds = mine.depth.bvh_seconds - depth_before.bvh_seconds;
+      cost.ray_seconds = mine.depth.ray_seconds - depth_before.ray_seconds;
+      cost.entry_seconds = mine.depth.entry_seconds - depth_before.entry_seconds;
+      cost.cap_seconds = mine.depth.cap_seconds - depth_before.cap_seconds;
+      cost.encode_seconds = mine.encode_seconds - encode_before;
+      cost.triangles = mine.depth.triangles - depth_before.triangles;
       {
         std::lock_guard lock(result_mutex);
         result.roots[tile] = root;

@@ -134,8 +134,8 @@ void add_build_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--plan-shards", flags->plan_shards,
                   "Print the work-balanced plan for N shards (JSON) and exit; builds nothing");
   cmd->add_flag("--tile-costs", flags->tile_costs,
-                "With --json: list each tile's measured CPU seconds (with --plan-shards: its planned work and "
-                "parts), to check the plan's work model");
+                "With --json: list each tile's measured CPU seconds and its seconds by phase (with "
+                "--plan-shards: its planned work and parts), to check the plan's work model");
   auto* sun = cmd->add_option("--sun", flags->sun, "Sun azimuth,elevation in degrees (default 135,45)");
   cmd->add_option("--light-dir", flags->light_dir, "Direction the light travels, X,Y,Z")->excludes(sun);
   cmd->add_option("--up", flags->up, "Scene up axis for --sun: z or y")->capture_default_str();

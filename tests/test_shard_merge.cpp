@@ -10,10 +10,10 @@
 
 #include <chrono>
 #include <cstring>
-#include <random>
-#include <thread>
 #include <map>
+#include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "builder/shard_plan.hpp"
@@ -189,13 +189,28 @@ TEST_F(ShardMerge, PlanIsIdenticalInEveryProcessAndTileCostsCoverEveryTile) {
   auto summary = nlohmann::json::parse(built);
   ASSERT_EQ(summary["tile_costs"].size(), summary["tiles"]["rendered"].get<size_t>());
   uint64_t hits = 0;
+  std::map<std::string, double> phases;  // per-tile phase seconds, summed
   for (const auto& c : summary["tile_costs"]) {
     EXPECT_GT(c["cpu_seconds"].get<double>(), 0);
+    for (const auto& [phase, seconds] : c["seconds"].items()) {
+      EXPECT_GE(seconds.get<double>(), 0) << phase;
+      phases[phase] += seconds.get<double>();
+    }
+    if (c["hit_texels"].get<uint64_t>() > 0) {
+      EXPECT_GT(c["triangles"].get<uint64_t>(), 0u);
+    }
     EXPECT_GE(c["morton"].get<uint64_t>(), summary["shard"]["morton_begin"].get<uint64_t>());
     EXPECT_LT(c["morton"].get<uint64_t>(), summary["shard"]["morton_end"].get<uint64_t>());
     hits += c["hit_texels"].get<uint64_t>();
   }
   EXPECT_EQ(hits, summary["hit_texels"].get<uint64_t>());
+  // The tiles' phases add up to the build's (the same clocks, per tile instead of per worker).
+  const auto& seconds = summary["seconds"];
+  for (const auto& [phase, total] : std::map<std::string, std::string>{
+           {"bvh", "bvh_thread_sum"}, {"rays", "rays_thread_sum"}, {"entry_rule", "entry_rule_thread_sum"},
+           {"caps", "caps_thread_sum"}, {"encode", "encode_thread_sum"}})
+    EXPECT_NEAR(phases[phase], seconds[total].get<double>(), 1e-6 + 1e-9 * phases[phase]) << phase;
+  EXPECT_GT(phases["rays"], 0);
   EXPECT_FALSE(read_meta(out).build_stats.contains("tile_costs"));  // the meta stays small
 }
 
