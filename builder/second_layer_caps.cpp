@@ -22,6 +22,8 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // Texels a footprint's box is padded by where it bounds a clip: far above the clips' rounding (ulps of
 // coordinates up to 2^20 texels) and far below a texel.
 constexpr double kBoxPad = 1.0 / 256;
+// Texels of a pair's box up to which near cover is tested texel by texel before any clip.
+constexpr uint64_t kNearTestTexels = 256;
 
 struct Prepared {
   std::array<LightSpacePoint, 3> p;
@@ -445,6 +447,47 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
     return false;
   };
 
+  // Could a near-cover region of `back` behind `front` inside [lo, hi] (global texels) change an
+  // interval? Per texel, what lower_caps_above_floor would test, with the region's depths in the
+  // square bounded by both planes over the whole square (on `back`, and between front + same_surface
+  // and front + epsilon): some point at or below the floor, and the bound that point gives,
+  // max(floor, the region's shallowest there), below the cap so far and below upper + margin as
+  // apply_exit_caps computes it. Near regions are slivers, 0.4 % of them lower a cap (honolulu
+  // 16384^2), so most pairs end here before their clips. The slack covers the clips' rounding.
+  auto near_could_matter = [&](const Prepared& back, const Prepared& front, double lo_u, double hi_u, double lo_v,
+                               double hi_v) {
+    const double size = window.size;
+    lo_u -= window.u0 + kWiden, hi_u += kWiden - window.u0, lo_v -= window.v0 + kWiden, hi_v += kWiden - window.v0;
+    if (hi_u < 0 || hi_v < 0 || lo_u > size || lo_v > size) return false;
+    auto texel = [&](double at) { return uint32_t(std::clamp(std::floor(at), 0.0, size - 1)); };
+    const uint32_t i0 = texel(lo_u), i1 = texel(hi_u), j0 = texel(lo_v), j1 = texel(hi_v);
+    // A large box costs more texels than the clips would (a wall over a floor on fzk_haus spans
+    // thousands, and its sliver region visits only the texels its rows reach): leave it to them.
+    if (uint64_t(i1 - i0 + 1) * (j1 - j0 + 1) > kNearTestTexels) return true;
+    const double half = 0.5 * (std::fabs(back.gu) + std::fabs(back.gv));
+    const double front_half = 0.5 * (std::fabs(front.gu) + std::fabs(front.gv));
+    const double slack = 1e-9 * (1 + std::fabs(back.zmin) + std::fabs(back.zmax) + std::fabs(front.zmin) +
+                                 std::fabs(front.zmax) +
+                                 (std::fabs(back.gu) + std::fabs(back.gv) + std::fabs(front.gu) + std::fabs(front.gv)) *
+                                     (std::fabs(window.u0) + std::fabs(window.v0) + 2 * size));
+    for (uint32_t j = j0; j <= j1; ++j)
+      for (uint32_t i = i0; i <= i1; ++i) {
+        const DepthInterval& interval = intervals.at(i, j);
+        if (!(interval.upper > interval.lower && interval.lower < 1.0f)) continue;
+        const double floor_depth = double(interval.lower) + floor_offset;
+        const double cu = window.u0 + i + 0.5, cv = window.v0 + j + 0.5;
+        const double centre = back.depth_at(cu, cv), front_centre = front.depth_at(cu, cv);
+        const double deepest = std::min({centre + half, back.zmax, front_centre + front_half + epsilon}) + slack;
+        if (deepest < floor_depth) continue;
+        const double shallowest =
+            std::max({centre - half, back.zmin, front_centre - front_half + same_surface}) - slack;
+        const double bound = std::max(floor_depth, shallowest);
+        if (!(bound < cap[size_t(j) * window.size + i]) || float(bound) - exit_margin >= interval.upper) continue;
+        return true;
+      }
+    return false;
+  };
+
   auto lower_by_region = [&](const Prepared& back, const Prepared& front) {
     if (!(back.zmax > front.zmin + same_surface)) return;  // nowhere behind it
     // Behind by too little wherever `back` meets a widened edge of `front`, or outside one: the
@@ -489,7 +532,8 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
     // Near cover needs a point of `back` at or below some texel's floor in the pair's box.
     const bool behind_by_epsilon = back.zmax > front.zmin + epsilon && gap_most + slack > epsilon;
     const bool near = back.zmin <= front.zmax + epsilon && gap_least - slack <= epsilon &&
-                      back.zmax >= double(smallest_lower(box_lo_u, box_hi_u, box_lo_v, box_hi_v)) + floor_offset;
+                      back.zmax >= double(smallest_lower(box_lo_u, box_hi_u, box_lo_v, box_hi_v)) + floor_offset &&
+                      near_could_matter(back, front, lo_u, hi_u, lo_v, hi_v);
     if (!behind_by_epsilon && !near) {
       ++local.skipped;
       return;
