@@ -22,8 +22,10 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // Texels a footprint's box is padded by where it bounds a clip: far above the clips' rounding (ulps of
 // coordinates up to 2^20 texels) and far below a texel.
 constexpr double kBoxPad = 1.0 / 256;
-// Texels of a pair's box up to which near cover is tested texel by texel before any clip.
-constexpr uint64_t kNearTestTexels = 256;
+// Texels of a pair's box up to which its regions are tested texel by texel before any clip: near
+// cover's slivers rarely matter, so it pays on larger boxes than the regions behind by epsilon do
+// (honolulu 16384^2: either limit prunes nearly as much as no limit; fzk_haus' walls span thousands).
+constexpr uint64_t kNearTestTexels = 256, kBehindTestTexels = 32;
 
 struct Prepared {
   std::array<LightSpacePoint, 3> p;
@@ -447,15 +449,17 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
     return false;
   };
 
-  // Could a near-cover region of `back` behind `front` inside [lo, hi] (global texels) change an
-  // interval? Per texel, what lower_caps_above_floor would test, with the region's depths in the
-  // square bounded by both planes over the whole square (on `back`, and between front + same_surface
-  // and front + epsilon): some point at or below the floor, and the bound that point gives,
-  // max(floor, the region's shallowest there), below the cap so far and below upper + margin as
-  // apply_exit_caps computes it. Near regions are slivers, 0.4 % of them lower a cap (honolulu
-  // 16384^2), so most pairs end here before their clips. The slack covers the clips' rounding.
-  auto near_could_matter = [&](const Prepared& back, const Prepared& front, double lo_u, double hi_u, double lo_v,
-                               double hi_v) {
+  // Could a region of `back` behind `front` by [gap_least, gap_most], inside [lo, hi] (global texels),
+  // change an interval? Per texel with an exit, the region's depths in the square are bounded by both
+  // planes over the whole square (on `back`, and between front + gap_least and front + gap_most):
+  // near cover (`floor`) needs a point at or below the texel's floor (lower_caps_above_floor), and the
+  // bound the region gives there, max(floor, its shallowest), must lie below the cap so far and
+  // below upper + margin as apply_exit_caps computes it; elsewhere the caps may stay higher, as
+  // the pruned regions above (the intervals are the same). Most near regions are slivers that
+  // lower nothing (0.4 % lower a cap on honolulu 16384^2), so most such pairs end here before their
+  // clips. The slack covers the clips' rounding.
+  auto region_could_matter = [&](const Prepared& back, const Prepared& front, double lo_u, double hi_u, double lo_v,
+                                 double hi_v, double gap_least, double gap_most, bool floor, uint64_t limit) {
     const double size = window.size;
     lo_u -= window.u0 + kWiden, hi_u += kWiden - window.u0, lo_v -= window.v0 + kWiden, hi_v += kWiden - window.v0;
     if (hi_u < 0 || hi_v < 0 || lo_u > size || lo_v > size) return false;
@@ -463,7 +467,7 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
     const uint32_t i0 = texel(lo_u), i1 = texel(hi_u), j0 = texel(lo_v), j1 = texel(hi_v);
     // A large box costs more texels than the clips would (a wall over a floor on fzk_haus spans
     // thousands, and its sliver region visits only the texels its rows reach): leave it to them.
-    if (uint64_t(i1 - i0 + 1) * (j1 - j0 + 1) > kNearTestTexels) return true;
+    if (uint64_t(i1 - i0 + 1) * (j1 - j0 + 1) > limit) return true;
     const double half = 0.5 * (std::fabs(back.gu) + std::fabs(back.gv));
     const double front_half = 0.5 * (std::fabs(front.gu) + std::fabs(front.gv));
     const double slack = 1e-9 * (1 + std::fabs(back.zmin) + std::fabs(back.zmax) + std::fabs(front.zmin) +
@@ -474,13 +478,13 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
       for (uint32_t i = i0; i <= i1; ++i) {
         const DepthInterval& interval = intervals.at(i, j);
         if (!(interval.upper > interval.lower && interval.lower < 1.0f)) continue;
-        const double floor_depth = double(interval.lower) + floor_offset;
+        const double floor_depth = floor ? double(interval.lower) + floor_offset : -kInfinity;
         const double cu = window.u0 + i + 0.5, cv = window.v0 + j + 0.5;
         const double centre = back.depth_at(cu, cv), front_centre = front.depth_at(cu, cv);
-        const double deepest = std::min({centre + half, back.zmax, front_centre + front_half + epsilon}) + slack;
+        const double deepest = std::min({centre + half, back.zmax, front_centre + front_half + gap_most}) + slack;
         if (deepest < floor_depth) continue;
         const double shallowest =
-            std::max({centre - half, back.zmin, front_centre - front_half + same_surface}) - slack;
+            std::max({centre - half, back.zmin, front_centre - front_half + gap_least}) - slack;
         const double bound = std::max(floor_depth, shallowest);
         if (!(bound < cap[size_t(j) * window.size + i]) || float(bound) - exit_margin >= interval.upper) continue;
         return true;
@@ -529,11 +533,14 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
       ++local.skipped;
       return;
     }
-    // Near cover needs a point of `back` at or below some texel's floor in the pair's box.
-    const bool behind_by_epsilon = back.zmax > front.zmin + epsilon && gap_most + slack > epsilon;
+    // Each region must be able to change an interval in some texel of the pair's box; near cover
+    // also needs a point of `back` at or below some texel's floor there.
+    const bool behind_by_epsilon = back.zmax > front.zmin + epsilon && gap_most + slack > epsilon &&
+                                   region_could_matter(back, front, lo_u, hi_u, lo_v, hi_v, epsilon, kInfinity, false,
+                                                       kBehindTestTexels);
     const bool near = back.zmin <= front.zmax + epsilon && gap_least - slack <= epsilon &&
                       back.zmax >= double(smallest_lower(box_lo_u, box_hi_u, box_lo_v, box_hi_v)) + floor_offset &&
-                      near_could_matter(back, front, lo_u, hi_u, lo_v, hi_v);
+                      region_could_matter(back, front, lo_u, hi_u, lo_v, hi_v, same_surface, epsilon, true, kNearTestTexels);
     if (!behind_by_epsilon && !near) {
       ++local.skipped;
       return;

@@ -8,9 +8,10 @@
 // How: triangle pairs whose footprint boxes overlap (a uniform grid of the boxes, each pair once) give
 // the convex region of T behind T': T clipped by T''s edges and by z_T - z_T' >= epsilon, exactly in
 // double; and the near-cover region, z_T - z_T' in [kSameSurface, epsilon], which counts per texel
-// only below the texel's lower + second_layer::near_cover_offset (clipped per texel by that floor;
-// a pair goes to those clips only when, in some texel of its box, both triangles' planes leave room
-// for a point at or below the floor that could still lower the cap and the interval). Each region's triangle fan lowers the caps of the texels it touches through
+// only below the texel's lower + second_layer::near_cover_offset (clipped per texel by that floor).
+// A pair with a small box goes to the clips only when, in some texel of it, both triangles' planes
+// leave room for a region point (at or below the floor, for near cover) that could still lower the
+// cap and the interval. Each region's triangle fan lowers the caps of the texels it touches through
 // lower_caps_by_triangle (exact per-texel clipping, closed form inside). The occluder's edges are
 // widened by 2^-20 texels and the epsilon narrowed by 2^-20 of itself so that the region found here
 // contains the exact one despite rounding: the caps are never above verify's brute-force reference.
