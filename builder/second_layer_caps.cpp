@@ -32,6 +32,9 @@ struct Prepared {
   double lo_u, hi_u, lo_v, hi_v, zmin, zmax;
   bool edge_on;
   double gu = 0, gv = 0;             // depth per texel along u, v
+  // A bound on the error of gu and gv, depth per texel: near edge-on slivers the normal's z cancels,
+  // so depth_at may stray from the plane through the vertices by this times the distance to p[0].
+  double gradient_error = 0;
   std::array<double, 3> A{}, B{}, widen{};  // inward edge k: A (u - p_k.u) + B (v - p_k.v) + widen >= 0
   // Box of the footprint with its edges widened (the corners of the widened triangle), which holds
   // every point covered_by keeps; infinite for slivers whose widened corners are ill-conditioned.
@@ -84,6 +87,10 @@ Prepared prepare(const LightSpacePoint& a, const LightSpacePoint& b, const Light
   const double nx = bv * cd - bd * cv, ny = bd * cu - bu * cd, nz = bu * cv - bv * cu;
   t.gu = -nx / nz;
   t.gv = -ny / nz;
+  const double nz_terms = std::fabs(bu * cv) + std::fabs(bv * cu);
+  t.gradient_error = 4e-16 / std::fabs(nz) *
+                     (std::fabs(bv * cd) + std::fabs(bd * cv) + std::fabs(bd * cu) + std::fabs(bu * cd) +
+                      (std::fabs(t.gu) + std::fabs(t.gv)) * nz_terms);
   const double s = nz > 0 ? 1.0 : -1.0;
   for (int k = 0; k < 3; ++k) {
     const LightSpacePoint& p = t.p[k];
@@ -452,14 +459,14 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
   // Could a region of `back` behind `front` by [gap_least, gap_most], inside [lo, hi] (global texels),
   // change an interval? Per texel with an exit, the region's depths in the square are bounded by both
   // planes over the whole square (on `back`, and between front + gap_least and front + gap_most):
-  // near cover (`floor`) needs a point at or below the texel's floor (lower_caps_above_floor), and the
+  // near cover (`with_floor`) needs a point at or below the texel's floor (lower_caps_above_floor), and the
   // bound the region gives there, max(floor, its shallowest), must lie below the cap so far and
   // below upper + margin as apply_exit_caps computes it; elsewhere the caps may stay higher, as
   // the pruned regions above (the intervals are the same). Most near regions are slivers that
   // lower nothing (0.4 % lower a cap on honolulu 16384^2), so most such pairs end here before their
   // clips. The slack covers the clips' rounding.
   auto region_could_matter = [&](const Prepared& back, const Prepared& front, double lo_u, double hi_u, double lo_v,
-                                 double hi_v, double gap_least, double gap_most, bool floor, uint64_t limit) {
+                                 double hi_v, double gap_least, double gap_most, bool with_floor, uint64_t limit) {
     const double size = window.size;
     lo_u -= window.u0 + kWiden, hi_u += kWiden - window.u0, lo_v -= window.v0 + kWiden, hi_v += kWiden - window.v0;
     if (hi_u < 0 || hi_v < 0 || lo_u > size || lo_v > size) return false;
@@ -470,15 +477,22 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
     if (uint64_t(i1 - i0 + 1) * (j1 - j0 + 1) > limit) return true;
     const double half = 0.5 * (std::fabs(back.gu) + std::fabs(back.gv));
     const double front_half = 0.5 * (std::fabs(front.gu) + std::fabs(front.gv));
+    // Texel centres lie within this many texels of either triangle's p[0] (the distance depth_at scales by).
+    auto reach_from = [&](const Prepared& t) {
+      return std::fabs(window.u0 - t.p[0].u) + std::fabs(window.v0 - t.p[0].v) + 2 * size;
+    };
     const double slack = 1e-9 * (1 + std::fabs(back.zmin) + std::fabs(back.zmax) + std::fabs(front.zmin) +
                                  std::fabs(front.zmax) +
-                                 (std::fabs(back.gu) + std::fabs(back.gv) + std::fabs(front.gu) + std::fabs(front.gv)) *
-                                     (std::fabs(window.u0) + std::fabs(window.v0) + 2 * size));
+                                 (std::fabs(back.gu) + std::fabs(back.gv)) *
+                                     (std::fabs(window.u0) + std::fabs(window.v0) + 2 * size + reach_from(back)) +
+                                 (std::fabs(front.gu) + std::fabs(front.gv)) *
+                                     (std::fabs(window.u0) + std::fabs(window.v0) + 2 * size + reach_from(front))) +
+                         back.gradient_error * reach_from(back) + front.gradient_error * reach_from(front);
     for (uint32_t j = j0; j <= j1; ++j)
       for (uint32_t i = i0; i <= i1; ++i) {
         const DepthInterval& interval = intervals.at(i, j);
         if (!(interval.upper > interval.lower && interval.lower < 1.0f)) continue;
-        const double floor_depth = floor ? double(interval.lower) + floor_offset : -kInfinity;
+        const double floor_depth = with_floor ? double(interval.lower) + floor_offset : -kInfinity;
         const double cu = window.u0 + i + 0.5, cv = window.v0 + j + 0.5;
         const double centre = back.depth_at(cu, cv), front_centre = front.depth_at(cu, cv);
         const double deepest = std::min({centre + half, back.zmax, front_centre + front_half + gap_most}) + slack;
@@ -518,7 +532,11 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
                                  (std::fabs(back.gu) + std::fabs(front.gu)) *
                                      (du + std::fabs(lo_u - back.p[0].u) + std::fabs(lo_u - front.p[0].u)) +
                                  (std::fabs(back.gv) + std::fabs(front.gv)) *
-                                     (dv + std::fabs(lo_v - back.p[0].v) + std::fabs(lo_v - front.p[0].v)));
+                                     (dv + std::fabs(lo_v - back.p[0].v) + std::fabs(lo_v - front.p[0].v))) +
+                         back.gradient_error *
+                             (du + dv + std::fabs(lo_u - back.p[0].u) + std::fabs(lo_v - back.p[0].v)) +
+                         front.gradient_error *
+                             (du + dv + std::fabs(lo_u - front.p[0].u) + std::fabs(lo_v - front.p[0].v));
     if (!(gap_most + slack > same_surface)) {  // `back` is nowhere behind `front` where they overlap
       ++local.skipped;
       return;
@@ -533,14 +551,16 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
       ++local.skipped;
       return;
     }
-    // Each region must be able to change an interval in some texel of the pair's box; near cover
-    // also needs a point of `back` at or below some texel's floor there.
+    // Near cover needs a point of `back` at or below some texel's floor in the pair's box. A small box
+    // is also tested texel by texel (region_could_matter) before the clips.
+    constexpr bool kWithFloor = true;
     const bool behind_by_epsilon = back.zmax > front.zmin + epsilon && gap_most + slack > epsilon &&
-                                   region_could_matter(back, front, lo_u, hi_u, lo_v, hi_v, epsilon, kInfinity, false,
-                                                       kBehindTestTexels);
+                                   region_could_matter(back, front, lo_u, hi_u, lo_v, hi_v, epsilon, kInfinity,
+                                                       !kWithFloor, kBehindTestTexels);
     const bool near = back.zmin <= front.zmax + epsilon && gap_least - slack <= epsilon &&
                       back.zmax >= double(smallest_lower(box_lo_u, box_hi_u, box_lo_v, box_hi_v)) + floor_offset &&
-                      region_could_matter(back, front, lo_u, hi_u, lo_v, hi_v, same_surface, epsilon, true, kNearTestTexels);
+                      region_could_matter(back, front, lo_u, hi_u, lo_v, hi_v, same_surface, epsilon, kWithFloor,
+                                          kNearTestTexels);
     if (!behind_by_epsilon && !near) {
       ++local.skipped;
       return;

@@ -74,8 +74,9 @@ class SecondLayerScratch {
 // normalised depth (second_layer::coplanar_epsilon). `intervals` (the tile's centre intervals) give
 // each texel's lower for the near-cover floor; with the exit margin, regions that cannot change
 // apply_exit_caps' result anywhere in their box are skipped: float(shallowest) - margin >= every
-// texel's upper there (texels without an exit have nothing to cap). The caps are then exact only
-// where they matter; apply_exit_caps gives the same intervals as with every region.
+// texel's upper there, or (texel by texel, for small boxes) no lower than the cap found so far
+// (texels without an exit have nothing to cap). The caps are then exact only where they matter;
+// apply_exit_caps gives the same intervals as with every region.
 // `storage`: a buffer to reuse (as receiver_surface_caps); `reuse`: working buffers to reuse.
 std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
                                      const TileIntervals& intervals, float exit_margin,

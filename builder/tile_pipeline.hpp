@@ -60,8 +60,9 @@ struct TileCost {
   double wall_seconds = 0;  // the same span in wall time (includes waiting for the store's write lock)
   uint64_t hit_texels = 0;
   uint64_t blob_bytes = 0;  // all methods
-  // Where the tile's time went (thread seconds, as the build JSON's *_thread_sum): a tile of misses
-  // still pays its rays and per-texel passes, and a city tile its cap pass.
+  // Where the tile's time went (thread seconds, as the build JSON's *_thread_sum; encode includes the
+  // blobs and previews, and the store write is in cpu and wall only): a tile of misses still pays its
+  // rays and per-texel passes, and a city tile its cap pass.
   double bvh_seconds = 0, ray_seconds = 0, entry_seconds = 0, cap_seconds = 0, encode_seconds = 0;
   uint64_t triangles = 0;  // in the tile's BVH
 };
