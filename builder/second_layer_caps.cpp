@@ -331,7 +331,7 @@ SecondLayerScratch& SecondLayerScratch::operator=(SecondLayerScratch&&) noexcept
 
 std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
                                      const TileIntervals& intervals, float exit_margin, SecondLayerCapCounts* counts,
-                                     std::vector<float> storage, SecondLayerScratch* reuse) {
+                                     std::vector<float> storage, SecondLayerScratch* reuse, bool texel_tests) {
   std::optional<SecondLayerScratch> own_scratch;
   SecondLayerScratch::Buffers& buffers = (reuse ? *reuse : own_scratch.emplace()).buffers();
   const uint32_t size = scene.layout().tile_size();
@@ -474,7 +474,7 @@ std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord til
     const uint32_t i0 = texel(lo_u), i1 = texel(hi_u), j0 = texel(lo_v), j1 = texel(hi_v);
     // A large box costs more texels than the clips would (a wall over a floor on fzk_haus spans
     // thousands, and its sliver region visits only the texels its rows reach): leave it to them.
-    if (uint64_t(i1 - i0 + 1) * (j1 - j0 + 1) > limit) return true;
+    if (!texel_tests || uint64_t(i1 - i0 + 1) * (j1 - j0 + 1) > limit) return true;
     const double half = 0.5 * (std::fabs(back.gu) + std::fabs(back.gv));
     const double front_half = 0.5 * (std::fabs(front.gu) + std::fabs(front.gv));
     // Texel centres lie within this many texels of either triangle's p[0] (the distance depth_at scales by).

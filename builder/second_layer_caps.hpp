@@ -78,9 +78,11 @@ class SecondLayerScratch {
 // (texels without an exit have nothing to cap). The caps are then exact only where they matter;
 // apply_exit_caps gives the same intervals as with every region.
 // `storage`: a buffer to reuse (as receiver_surface_caps); `reuse`: working buffers to reuse.
+// `texel_tests`: false sends every small box to the clips too, for the tests that check the
+// texel-by-texel prune changes no interval.
 std::vector<float> second_layer_caps(const LightSpaceScene& scene, TileCoord tile, double coplanar_epsilon,
                                      const TileIntervals& intervals, float exit_margin,
                                      SecondLayerCapCounts* counts = nullptr, std::vector<float> storage = {},
-                                     SecondLayerScratch* reuse = nullptr);
+                                     SecondLayerScratch* reuse = nullptr, bool texel_tests = true);
 
 }  // namespace shadowtiles

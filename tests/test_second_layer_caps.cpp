@@ -7,6 +7,7 @@
 // - exact coplanar duplicates (IFC double faces) on the same slope keep their interval's width.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <random>
 
@@ -15,6 +16,7 @@
 #include "builder/light_space_scene.hpp"
 #include "builder/reference_caps.hpp"
 #include "builder/scene.hpp"
+#include "builder/second_layer_caps.hpp"
 #include "builder/second_layer_rule.hpp"
 
 namespace shadowtiles {
@@ -259,6 +261,85 @@ TEST(SecondLayerCaps, CrumpledMeshesBuildCapsAreNeverAboveTheReference) {
     EXPECT_EQ(result.above, 0u) << "seed " << seed;
     EXPECT_GT(result.capped, 100u) << "seed " << seed << ": the folds should leave exits to cap";
   }
+}
+
+// The texel-by-texel test before the clips (second_layer_caps' `texel_tests`) skips only regions
+// that cannot change an interval: with and without it, every capped interval is the same bit for
+// bit, on a 128^2 map in four 64^2 tiles (three of them away from the origin), while it does skip
+// pairs. Taking a quarter texel of slope off the bound changes some texel's upper here; raising the
+// roof's bound behind epsilon by up to two biases does not, since near cover caps those texels at
+// the same depth (docs/build-time.md, session 37).
+// A flat roof with a gently tilted plane under it that comes within the coplanar epsilon of it
+// halfway: along that line the region behind by epsilon is shallowest at roof + epsilon, where the
+// roof's plane, not the tilted one's, bounds it. Both are grids of small quads (boxes of a few
+// texels), since larger boxes skip the texel test.
+void add_grid(Scene& scene, const std::string& name, double z0, double dz_dx) {
+  constexpr uint32_t kSide = 41;
+  std::vector<Vec3> vertices;
+  for (uint32_t j = 0; j < kSide; ++j)
+    for (uint32_t i = 0; i < kSide; ++i) vertices.push_back({i * 0.25, j * 0.25, z0 + dz_dx * i * 0.25});
+  Triangles triangles;
+  for (uint32_t j = 0; j + 1 < kSide; ++j)
+    for (uint32_t i = 0; i + 1 < kSide; ++i) {
+      const uint32_t a = j * kSide + i, b = a + 1, c = a + kSide, d = c + 1;
+      triangles.push_back({a, b, d});
+      triangles.push_back({a, d, c});
+    }
+  scene.add_mesh(name, vertices, triangles);
+}
+
+Scene plane_nearing_a_roof() {
+  Scene scene;
+  scene.add_mesh("floor", {{-1, -1, 0}, {11, -1, 0}, {-1, 11, 0}, {11, 11, 0}}, Triangles{{0, 1, 3}, {0, 3, 2}});
+  add_grid(scene, "roof", 3.0, 0);
+  add_grid(scene, "tilted", 2.96, 0.004);
+  return scene;
+}
+
+TEST(SecondLayerCaps, TexelTestsBeforeTheClipsChangeNoInterval) {
+  constexpr uint32_t kMap = 128, kTile = 64;
+  uint64_t pairs_with = 0, pairs_without = 0, exits = 0;
+  std::vector<Scene> scenes{near_cover_scene(), plane_nearing_a_roof(), random_soup(1), random_soup(2),
+                            crumpled_mesh(1), crumpled_mesh(2)};
+  for (size_t s = 0; s < scenes.size(); ++s) {
+    auto frame = LightFrame::fit({0, 0, -1}, scenes[s].bounds, kMap);
+    ASSERT_TRUE(frame.ok());
+    auto layout = TileLayout::make(kMap, kTile);
+    ASSERT_TRUE(layout.ok());
+    LightSpaceScene light_scene(scenes[s], *frame, *layout);
+    auto device = EmbreeDevice::create();
+    ASSERT_TRUE(device.ok());
+    const double bias = frame->depth_from_world(kBiasWorld);
+    DualDepthOptions options;
+    options.exit_margin = float(2 * bias);
+    options.cap_exits_at_receiver_surfaces = true;
+    options.receivers = ReceiverContract::surfaces;
+    options.coplanar_epsilon = float(second_layer::coplanar_epsilon(bias));
+    DualDepthRenderer renderer(*device, light_scene, options);
+    for (uint32_t ty = 0; ty < kMap / kTile; ++ty)
+      for (uint32_t tx = 0; tx < kMap / kTile; ++tx) {
+        auto centre = renderer.render_centre({tx, ty});
+        ASSERT_TRUE(centre.ok());
+        TileIntervals with = *centre, without = *centre;
+        SecondLayerCapCounts counts_with, counts_without;
+        const auto caps_with = second_layer_caps(light_scene, {tx, ty}, options.coplanar_epsilon, *centre,
+                                                 options.exit_margin, &counts_with);
+        const auto caps_without = second_layer_caps(light_scene, {tx, ty}, options.coplanar_epsilon, *centre,
+                                                    options.exit_margin, &counts_without, {}, nullptr, false);
+        apply_exit_caps(with, caps_with, options.exit_margin);
+        apply_exit_caps(without, caps_without, options.exit_margin);
+        uint64_t differ = 0;
+        for (size_t i = 0; i < with.texels.size(); ++i) {
+          differ += std::bit_cast<uint32_t>(with.texels[i].upper) != std::bit_cast<uint32_t>(without.texels[i].upper) ||
+                    std::bit_cast<uint32_t>(with.texels[i].lower) != std::bit_cast<uint32_t>(without.texels[i].lower);
+          exits += without.texels[i].upper > without.texels[i].lower && without.texels[i].lower < 1.0f;
+        }
+        EXPECT_EQ(differ, 0u) << "scene " << s << ", tile " << tx << "," << ty;
+        pairs_with += counts_with.pairs_tested, pairs_without += counts_without.pairs_tested;
+      }
+  }
+  EXPECT_GT(exits, 10000u);  // the scenes leave intervals to cap
+  EXPECT_LT(pairs_with, pairs_without) << "the test should send fewer pairs to the clips";
 }
 
 }  // namespace
