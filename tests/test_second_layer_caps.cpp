@@ -61,6 +61,17 @@ struct Built {
   TileIntervals reference;  // render_centre() capped by apply_reference_caps
 };
 
+// The renderer's options under `surfaces` with caps, at the tests' bias (exit margin 2 biases).
+DualDepthOptions surfaces_options(const LightFrame& frame) {
+  const double bias = frame.depth_from_world(kBiasWorld);
+  DualDepthOptions options;
+  options.exit_margin = float(2 * bias);
+  options.cap_exits_at_receiver_surfaces = true;
+  options.receivers = ReceiverContract::surfaces;
+  options.coplanar_epsilon = float(second_layer::coplanar_epsilon(bias));
+  return options;
+}
+
 Built build(const Scene& scene) {
   auto frame = LightFrame::fit({0, 0, -1}, scene.bounds, kResolution);
   EXPECT_TRUE(frame.ok());
@@ -69,11 +80,7 @@ Built build(const Scene& scene) {
   auto device = EmbreeDevice::create();
   EXPECT_TRUE(device.ok());
   const double bias = frame->depth_from_world(kBiasWorld);
-  DualDepthOptions options;
-  options.exit_margin = float(2 * bias);
-  options.cap_exits_at_receiver_surfaces = true;
-  options.receivers = ReceiverContract::surfaces;
-  options.coplanar_epsilon = float(second_layer::coplanar_epsilon(bias));
+  const DualDepthOptions options = surfaces_options(*frame);
   DualDepthRenderer renderer(*device, light_scene, options);
   auto fast = renderer.render({0, 0});
   auto centre = renderer.render_centre({0, 0});
@@ -232,6 +239,18 @@ TEST(SecondLayerCaps, RandomSoupsBuildCapsAreNeverAboveTheReference) {
 // over their neighbours, with random heights. Pairs that share an edge or a vertex are what the fast
 // pass's edge gap test drops before clipping (the part of one a widened edge of the other keeps is a
 // sliver along the shared edge or vertex); a fold must not be dropped with them.
+// Two triangles per cell of a side x side grid of vertices in row-major order.
+Triangles grid_triangles(uint32_t side) {
+  Triangles triangles;
+  for (uint32_t j = 0; j + 1 < side; ++j)
+    for (uint32_t i = 0; i + 1 < side; ++i) {
+      const uint32_t a = j * side + i, b = a + 1, c = a + side, d = c + 1;
+      triangles.push_back({a, b, d});
+      triangles.push_back({a, d, c});
+    }
+  return triangles;
+}
+
 Scene crumpled_mesh(uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0, 1);
@@ -244,14 +263,7 @@ Scene crumpled_mesh(uint32_t seed) {
     for (uint32_t i = 0; i < kSide; ++i)
       vertices.push_back({i * cell + cell * (unit(rng) - 0.5) * 1.6, j * cell + cell * (unit(rng) - 0.5) * 1.6,
                           1 + 2 * unit(rng)});
-  Triangles triangles;
-  for (uint32_t j = 0; j + 1 < kSide; ++j)
-    for (uint32_t i = 0; i + 1 < kSide; ++i) {
-      const uint32_t a = j * kSide + i, b = a + 1, c = a + kSide, d = c + 1;
-      triangles.push_back({a, b, d});
-      triangles.push_back({a, d, c});
-    }
-  scene.add_mesh("crumpled", vertices, triangles);
+  scene.add_mesh("crumpled", vertices, grid_triangles(kSide));
   return scene;
 }
 
@@ -278,14 +290,7 @@ void add_grid(Scene& scene, const std::string& name, double z0, double dz_dx) {
   std::vector<Vec3> vertices;
   for (uint32_t j = 0; j < kSide; ++j)
     for (uint32_t i = 0; i < kSide; ++i) vertices.push_back({i * 0.25, j * 0.25, z0 + dz_dx * i * 0.25});
-  Triangles triangles;
-  for (uint32_t j = 0; j + 1 < kSide; ++j)
-    for (uint32_t i = 0; i + 1 < kSide; ++i) {
-      const uint32_t a = j * kSide + i, b = a + 1, c = a + kSide, d = c + 1;
-      triangles.push_back({a, b, d});
-      triangles.push_back({a, d, c});
-    }
-  scene.add_mesh(name, vertices, triangles);
+  scene.add_mesh(name, vertices, grid_triangles(kSide));
 }
 
 Scene plane_nearing_a_roof() {
@@ -309,12 +314,7 @@ TEST(SecondLayerCaps, TexelTestsBeforeTheClipsChangeNoInterval) {
     LightSpaceScene light_scene(scenes[s], *frame, *layout);
     auto device = EmbreeDevice::create();
     ASSERT_TRUE(device.ok());
-    const double bias = frame->depth_from_world(kBiasWorld);
-    DualDepthOptions options;
-    options.exit_margin = float(2 * bias);
-    options.cap_exits_at_receiver_surfaces = true;
-    options.receivers = ReceiverContract::surfaces;
-    options.coplanar_epsilon = float(second_layer::coplanar_epsilon(bias));
+    const DualDepthOptions options = surfaces_options(*frame);
     DualDepthRenderer renderer(*device, light_scene, options);
     for (uint32_t ty = 0; ty < kMap / kTile; ++ty)
       for (uint32_t tx = 0; tx < kMap / kTile; ++tx) {
