@@ -31,12 +31,20 @@ double thread_cpu_seconds() {
   return double(t.tv_sec) + double(t.tv_nsec) * 1e-9;
 }
 
-// One tile: render, encode every method, and gather the puts of its one transaction.
-// Returns the tile's root interval (a miss when nothing covers it) through `root`.
-Status process_tile(const TilePipelineInput& input, TileCoord tile, TilePipelineTotals& mine,
-                    std::atomic<uint64_t>& rays_done, std::vector<store::Store::Put>& puts, DepthInterval& root,
-                    RenderBuffers& buffers) {
+// What one tile cost and gave, beside the totals it adds to: its row of `build --tile-costs`.
+struct TileOutcome {
   DualDepthStats depth;
+  uint64_t blob_bytes = 0;
+  double encode_seconds = 0;
+  DepthInterval root;  // a miss when nothing covers the tile
+};
+
+// One tile: render, encode every method, and gather the puts of its one transaction.
+Status process_tile(const TilePipelineInput& input, TileCoord tile, TilePipelineTotals& mine,
+                    std::atomic<uint64_t>& rays_done, std::vector<store::Store::Put>& puts, TileOutcome& outcome,
+                    RenderBuffers& buffers) {
+  DualDepthStats& depth = outcome.depth;
+  DepthInterval& root = outcome.root;
   auto intervals = input.renderer->render(tile, &depth, &buffers);
   if (!intervals) return intervals.error();
   mine.depth.add(depth);
@@ -55,6 +63,7 @@ Status process_tile(const TilePipelineInput& input, TileCoord tile, TilePipeline
       const char* name = store::method_name(encoded.method);
       mine.encode_seconds_by_method[name] += encoded.seconds + seconds_since(blob_start);
       mine.blob_bytes += blob.size();
+      outcome.blob_bytes += blob.size();
       mine.bytes_by_method[name] += blob.size();
       mine.raw_bytes_by_method[name] += encoded.payload.size();
       mine.reference_bytes_by_method[name] += encoded.reference_bytes;
@@ -78,7 +87,8 @@ Status process_tile(const TilePipelineInput& input, TileCoord tile, TilePipeline
   const auto key = store::progress_key(tile.x, tile.y);
   const auto record = store::encode_progress({!empty, root.lower, root.upper});
   puts.push_back({store::Database::progress, {key.begin(), key.end()}, {record.begin(), record.end()}});
-  mine.encode_seconds += seconds_since(encode_start);
+  outcome.encode_seconds = seconds_since(encode_start);
+  mine.encode_seconds += outcome.encode_seconds;
   buffers.intervals = std::move(*intervals);  // the next tile renders into the same pages
   return {};
 }
@@ -127,12 +137,9 @@ Result<TilePipelineResult> run_tile_pipeline(const TilePipelineInput& input, con
       const TileCoord tile = todo[i];
       const double cpu_start = thread_cpu_seconds();
       const auto wall_start = Clock::now();
-      const uint64_t hits_before = mine.depth.hits, bytes_before = mine.blob_bytes;
-      const DualDepthStats depth_before = mine.depth;
-      const double encode_before = mine.encode_seconds;
       std::vector<store::Store::Put> puts;
-      DepthInterval root;
-      if (Status s = process_tile(input, tile, mine, rays_done, puts, root, buffers); !s) {
+      TileOutcome outcome;
+      if (Status s = process_tile(input, tile, mine, rays_done, puts, outcome, buffers); !s) {
         fail(s.error());
         break;
       }
@@ -142,17 +149,18 @@ Result<TilePipelineResult> run_tile_pipeline(const TilePipelineInput& input, con
         break;
       }
       mine.store_seconds += seconds_since(store_start);
-      TileCost cost{tile, thread_cpu_seconds() - cpu_start, seconds_since(wall_start),
-                    mine.depth.hits - hits_before, mine.blob_bytes - bytes_before};
-      cost.bvh_seconds = mine.depth.bvh_seconds - depth_before.bvh_seconds;
-      cost.ray_seconds = mine.depth.ray_seconds - depth_before.ray_seconds;
-      cost.entry_seconds = mine.depth.entry_seconds - depth_before.entry_seconds;
-      cost.cap_seconds = mine.depth.cap_seconds - depth_before.cap_seconds;
-      cost.encode_seconds = mine.encode_seconds - encode_before;
-      cost.triangles = mine.depth.triangles - depth_before.triangles;
+      const DualDepthStats& depth = outcome.depth;
+      TileCost cost{tile, thread_cpu_seconds() - cpu_start, seconds_since(wall_start), depth.hits,
+                    outcome.blob_bytes};
+      cost.bvh_seconds = depth.bvh_seconds;
+      cost.ray_seconds = depth.ray_seconds;
+      cost.entry_seconds = depth.entry_seconds;
+      cost.cap_seconds = depth.cap_seconds;
+      cost.encode_seconds = outcome.encode_seconds;
+      cost.triangles = depth.triangles;
       {
         std::lock_guard lock(result_mutex);
-        result.roots[tile] = root;
+        result.roots[tile] = outcome.root;
         result.costs.push_back(cost);
       }
       const uint64_t count = ++committed;
