@@ -6,39 +6,8 @@
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
 
 namespace shadowtiles::cli {
-namespace {
-
-#if defined(__GLIBC__) && defined(__linux__) && defined(MADV_HUGEPAGE)
-// The heap a build grows in its first tiles (hundreds of MiB on a full-depth tree), in 2 MiB pages
-// where the kernel allows: one page fault per 2 MiB instead of per 4 KiB. On this VM a fault costs
-// several microseconds, and the faults of the heap's growth were 7 % of honolulu 16384² `anywhere`'s
-// samples; with glibc's own switch for it (GLIBC_TUNABLES=glibc.malloc.hugetlb=1, which a program
-// cannot set for itself) that build took 7.67 / 7.42 / 7.20 -> 6.59 / 6.40 / 6.55 s. So: one block
-// of kHeapReserve from the heap (M_MMAP_MAX is 0, so it extends the program break), advised as huge
-// pages and freed. It stays in the heap (below the trim threshold), untouched pages cost nothing
-// resident, and the tiles' buffers that later reuse it fault in 2 MiB at a time. Under other
-// allocators (ASan's) the advice lands on memory malloc returns to them: no effect, no harm.
-constexpr size_t kHeapReserve = size_t(768) << 20;
-constexpr uintptr_t kHugePage = uintptr_t(2) << 20;
-
-void back_heap_growth_with_huge_pages() {
-  void* block = std::malloc(kHeapReserve);
-  if (!block) return;
-  const uintptr_t begin = (reinterpret_cast<uintptr_t>(block) + kHugePage - 1) & ~(kHugePage - 1);
-  const uintptr_t end = (reinterpret_cast<uintptr_t>(block) + kHeapReserve) & ~(kHugePage - 1);
-  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // advice only
-  std::free(block);
-}
-#else
-void back_heap_growth_with_huge_pages() {}
-#endif
-
-}  // namespace
 
 void keep_freed_memory_for_reuse() {
 #if defined(__GLIBC__)
@@ -55,10 +24,14 @@ void keep_freed_memory_for_reuse() {
   // The one arena's lock is taken rarely: blocks over 1 KiB are a few hundred per tile (counted:
   // 260 on dragon `surfaces`, ~600 on fzk_haus `anywhere`), and most small ones come from each
   // thread's cache (tcache) without it. Not for `verify` (4096² fzk_haus `surfaces`: 1.1x slower).
+  // The heap is not advised as transparent huge pages: it once sped honolulu 16384² `anywhere` up
+  // (7.67 -> 6.59 s), but on this VM a fresh 2 MiB page now costs several times its 512 small pages
+  // (a first touch of 400 MiB: 0.26-0.34 GB/s huge against 1.4-1.5 GB/s small, alternated), and in
+  // alternated builds without the advice honolulu `anywhere` took 10.8 / 10.0 / 9.2 / 9.9 s against
+  // 12.7 / 11.1 / 11.9 / 11.0 s with it, and oahu `surfaces` 3.66 s against 4.17 s (means of five).
   mallopt(M_MMAP_MAX, 0);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
   mallopt(M_ARENA_MAX, 1);
-  back_heap_growth_with_huge_pages();
 #endif
 }
 

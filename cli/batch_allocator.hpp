@@ -9,9 +9,8 @@
 namespace shadowtiles::cli {
 
 // glibc: freed memory stays in one arena's heap for the next tile instead of going back to the
-// kernel (no mmap for large blocks, a 1 GiB trim threshold, one arena for every thread), and the
-// heap's first 768 MiB of growth is advised as transparent huge pages. Measured in
-// docs/build-time.md (sessions 20 and 25).
+// kernel (no mmap for large blocks, a 1 GiB trim threshold, one arena for every thread), in small
+// pages (huge pages were dropped in session 38). Measured in docs/build-time.md (sessions 20, 25, 38).
 void keep_freed_memory_for_reuse();
 
 // glibc: blocks up to 32 MiB come from the heap, and up to 4 transactions' worth of free heap (at
