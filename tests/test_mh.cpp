@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -10,6 +11,7 @@
 #include <tuple>
 
 #include "builder/mh_builder.hpp"
+#include "builder/mh_dense_levels.hpp"
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
 #include "builder/mh_verify.hpp"
@@ -143,6 +145,82 @@ TEST(MhBuild, AllMissIsARootLeafWithAFiniteValue) {
   EXPECT_EQ(e.view.stats().nodes(), 1u);
   EXPECT_EQ(e.bytes.size(), e.view.stats().header_bytes);
   EXPECT_EQ(e.view.lookup(17, 200), 1.0f);
+}
+
+// The bottom-up rule written out plainly: per parent, the lower covered by the most children (ties
+// to the first) and the children it covers, level by level in Morton order, with no shortcut.
+// build_mh's bottom-up builder skips the search for four equal children and for four that share a
+// depth; it must give these bytes.
+MhHierarchy bottom_up_by_search(const TileIntervals& tile) {
+  const unsigned levels = unsigned(std::countr_zero(tile.size));
+  MhDenseLevels dense;
+  dense.size = tile.size;
+  dense.levels = levels;
+  dense.masks.resize(levels);
+  dense.valued.resize(levels + 1);
+  std::vector<DepthInterval> child(tile.texels.size());
+  for (size_t m = 0; m < child.size(); ++m) child[m] = tile.texels[size_t(morton_y(m)) * tile.size + morton_x(m)];
+  for (unsigned l = levels; l-- > 0;) {
+    const size_t n = size_t(1) << (2 * l);
+    std::vector<DepthInterval> parent(n);
+    dense.masks[l].assign(n, 0);
+    for (size_t p = 0; p < n; ++p) {
+      const DepthInterval* c = &child[4 * p];
+      unsigned best = 0, best_count = 0;
+      for (unsigned i = 0; i < 4; ++i) {
+        unsigned count = 0;
+        for (unsigned j = 0; j < 4; ++j) count += c[j].lower <= c[i].lower && c[i].lower <= c[j].upper;
+        if (count > best_count) best = i, best_count = count;
+      }
+      const float candidate = c[best].lower;
+      DepthInterval interval{-kInf, kInf};
+      uint8_t mask = 0;
+      for (unsigned i = 0; i < 4; ++i) {
+        unsigned code = 0;
+        if (c[i].lower <= candidate && candidate <= c[i].upper) {
+          interval.lower = std::max(interval.lower, c[i].lower);
+          interval.upper = std::min(interval.upper, c[i].upper);
+        } else {
+          code = 1;
+          dense.valued[l + 1].push_back(c[i]);
+        }
+        if (l + 1 < levels && dense.masks[l + 1][4 * p + i] != 0) code |= 2;
+        mask |= uint8_t(code << (2 * i));
+      }
+      dense.masks[l][p] = mask;
+      parent[p] = interval;
+    }
+    child = std::move(parent);
+  }
+  dense.valued[0] = {child[0]};
+  return to_hierarchy(std::move(dense));
+}
+
+TEST(MhBuild, BottomUpShortcutsGiveTheSearchsBytes) {
+  std::vector<std::pair<std::string, TileIntervals>> tiles;
+  for (MhSyntheticKind kind : kKinds)
+    for (uint32_t seed : {3u, 17u}) tiles.emplace_back(synthetic_kind_name(kind), make_synthetic_tile(kind, 64, seed));
+  // Smooth slopes with room behind them (most 2x2 blocks share a depth), ties, zero widths and holes.
+  for (uint32_t seed : {5u, 29u}) {
+    TileIntervals slope;
+    slope.size = 128;
+    slope.texels.resize(size_t(128) * 128);
+    uint64_t state = seed;
+    auto next = [&] { return (state = state * 6364136223846793005ull + 1442695040888963407ull) >> 40; };
+    for (uint32_t v = 0; v < 128; ++v)
+      for (uint32_t u = 0; u < 128; ++u) {
+        const float lower = 0.2f + 0.001f * float(u) + 0.0005f * float(v) + (next() % 7 == 0 ? 0.01f : 0.0f);
+        const uint64_t pick = next() % 10;
+        const float width = pick == 0 ? 0.0f : pick == 1 ? 0.0005f : 0.002f * float(next() % 20);
+        slope.texels[size_t(v) * 128 + u] = next() % 50 == 0 ? DepthInterval{1.0f, 1.0f} : DepthInterval{lower, lower + width};
+      }
+    tiles.emplace_back("slope " + std::to_string(seed), std::move(slope));
+  }
+  for (const auto& [name, tile] : tiles) {
+    auto built = build_mh(tile, {MhConstruction::bottom_up});
+    ASSERT_TRUE(built.ok()) << name;
+    EXPECT_EQ(encode_mh(*built).value(), encode_mh(bottom_up_by_search(tile)).value()) << name;
+  }
 }
 
 TEST(MhBuild, RootSummaryIsTheRootInterval) {
