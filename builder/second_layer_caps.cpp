@@ -176,7 +176,7 @@ bool behind_near_front_edges(const Prepared& back, const Prepared& front, double
   for (double& x : excess) x -= threshold;
   // Nowhere behind `front`'s plane by more than the threshold: every part's vertices and crossings
   // below are blends of these (the test below would find no edge exceeding it). Most mesh
-  // neighbours end here, before the edge functions (a third of honolulu's pairs, half of oahu's).
+  // neighbours end here, before the edge functions (30 % of honolulu's calls, half of oahu's).
   if (!(excess[0] > 0) && !(excess[1] > 0) && !(excess[2] > 0)) return false;
   std::array<std::array<double, 3>, 3> f;  // f[k][i]: back's vertex i against front's widened edge k
   for (int k = 0; k < 3; ++k) {

@@ -24,11 +24,13 @@ void keep_freed_memory_for_reuse() {
   // The one arena's lock is taken rarely: blocks over 1 KiB are a few hundred per tile (counted:
   // 260 on dragon `surfaces`, ~600 on fzk_haus `anywhere`), and most small ones come from each
   // thread's cache (tcache) without it. Not for `verify` (4096² fzk_haus `surfaces`: 1.1x slower).
-  // The heap is not advised as transparent huge pages: it once sped honolulu 16384² `anywhere` up
-  // (7.67 -> 6.59 s), but on this VM a fresh 2 MiB page now costs several times its 512 small pages
-  // (a first touch of 400 MiB: 0.26-0.34 GB/s huge against 1.4-1.5 GB/s small, alternated), and in
-  // alternated builds without the advice honolulu `anywhere` took 10.8 / 10.0 / 9.2 / 9.9 s against
-  // 12.7 / 11.1 / 11.9 / 11.0 s with it, and oahu `surfaces` 3.66 s against 4.17 s (means of five).
+  // The heap is not advised as transparent huge pages. Session 25's advice (a freed 768 MiB block
+  // under madvise(MADV_HUGEPAGE)) once sped builds up (honolulu `anywhere` wall/rays 6.71 / 6.88 /
+  // 6.61 -> 6.26 / 5.98 / 6.40), but on this VM a fresh 2 MiB page now costs several times its 512
+  // small pages: a first touch of 400 MiB took 1.53 / 1.46 / 1.17 s in huge pages against 0.27 /
+  // 0.29 / 0.27 s in small ones, alternated. Without the advice honolulu `anywhere` took 10.8 /
+  // 10.0 / 9.2 / 9.9 s against 12.7 / 11.1 / 11.9 / 11.0 s with it, and oahu `surfaces` 3.66 s
+  // against 4.17 s (means of five); docs/build-time.md, session 38.
   mallopt(M_MMAP_MAX, 0);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
   mallopt(M_ARENA_MAX, 1);
