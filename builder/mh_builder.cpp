@@ -93,21 +93,11 @@ MhHierarchy build_bottom_up(const TileIntervals& tile) {
       } else {
         for (unsigned i = 0; i < 4; ++i) c[i] = child[4 * p + i];
       }
-      // Four equal children (misses, flat ground under a high sun): every one is covered by c[0].lower,
-      // the intersection is c[0] itself, nothing is kept. The same result as the search below gives,
-      // at a fraction of its cost; it is most of the map outside the geometry.
-      auto same = [](const DepthInterval& a, const DepthInterval& b) { return a.lower == b.lower && a.upper == b.upper; };
-      if (same(c[0], c[1]) && same(c[0], c[2]) && same(c[0], c[3])) {
-        uint8_t mask = 0;
-        if (child_masks)
-          for (unsigned i = 0; i < 4; ++i) mask |= uint8_t((child_masks[4 * p + i] != 0 ? 2u : 0u) << (2 * i));
-        masks[p] = mask;
-        parent[p] = c[0];
-        continue;
-      }
-      // Four children sharing a depth (a smooth surface with room behind it): the largest lower is
-      // covered by all four, and only children with that lower count four, so the search below
-      // would pick it and cover every child. The same result without its sixteen comparisons.
+      // Four children sharing a depth (misses and flat ground, where all four are equal, or a smooth
+      // surface with room behind it): the largest lower is covered by all four, and only children
+      // with that lower count four, so the search below would pick it and cover every child; the
+      // parent is their intersection and nothing is kept. The same result without the search, on
+      // most of a map (std::max and std::min keep the first of equal values, as the search does).
       const float most_lower = std::max(std::max(c[0].lower, c[1].lower), std::max(c[2].lower, c[3].lower));
       const float least_upper = std::min(std::min(c[0].upper, c[1].upper), std::min(c[2].upper, c[3].upper));
       if (most_lower <= least_upper) {

@@ -62,7 +62,6 @@ Status process_tile(const TilePipelineInput& input, TileCoord tile, TilePipeline
       auto blob = store::encode_blob(encoded.method, encoded.payload, 0, input.zstd_level);
       const char* name = store::method_name(encoded.method);
       mine.encode_seconds_by_method[name] += encoded.seconds + seconds_since(blob_start);
-      mine.blob_bytes += blob.size();
       outcome.blob_bytes += blob.size();
       mine.bytes_by_method[name] += blob.size();
       mine.raw_bytes_by_method[name] += encoded.payload.size();
@@ -89,6 +88,7 @@ Status process_tile(const TilePipelineInput& input, TileCoord tile, TilePipeline
   puts.push_back({store::Database::progress, {key.begin(), key.end()}, {record.begin(), record.end()}});
   outcome.encode_seconds = seconds_since(encode_start);
   mine.encode_seconds += outcome.encode_seconds;
+  mine.blob_bytes += outcome.blob_bytes;
   buffers.intervals = std::move(*intervals);  // the next tile renders into the same pages
   return {};
 }
