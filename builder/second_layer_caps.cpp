@@ -57,7 +57,8 @@ void widened_reach(Prepared& t) {
     // A_k (u - p_k.u) + B_k (v - p_k.v) = -widen_k and A_j (u - p_k.u) + B_j (v - p_k.v) = -widen_j
     // (p_k lies on edge j, so both are written about p_k).
     const double det = t.A[k] * t.B[j] - t.A[j] * t.B[k];
-    const double scale = std::hypot(t.A[k], t.B[k]) * std::hypot(t.A[j], t.B[j]);
+    // hypot(A, B) of both edges, as prepare() left it in widen (a power-of-two scale: exact).
+    const double scale = (t.widen[k] / kWiden) * (t.widen[j] / kWiden);
     if (!(std::fabs(det) > 1e-6 * scale)) return;  // a corner sharper than 1e-6 rad: keep the box infinite
     const double du = (-t.widen[k] * t.B[j] + t.widen[j] * t.B[k]) / det;
     const double dv = (-t.A[k] * t.widen[j] + t.A[j] * t.widen[k]) / det;
