@@ -1,8 +1,12 @@
 #include "builder/tile_geometry.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
+#include <vector>
+
+#include "builder/stable_key_sort.hpp"
 
 namespace shadowtiles {
 namespace {
@@ -34,7 +38,7 @@ std::vector<EdgeNeighbours> link_edge_neighbours(const std::vector<uint32_t>& id
       edges.push_back({std::min(a, b) << 32 | std::max(a, b), uint32_t(t * 3 + k)});
     }
   }
-  std::sort(edges.begin(), edges.end());
+  stable_sort_by_key(edges);  // edges were pushed in increasing value order: std::sort's order
   for (size_t i = 0; i < edges.size();) {
     size_t end = i + 1;
     while (end < edges.size() && edges[end].first == edges[i].first) ++end;
@@ -123,13 +127,14 @@ TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile, 
     const auto& tri = world.patch_triangles[t];
     add(true, tri[0], tri[1], tri[2], false, true);
   }
-  if (with_neighbours) {
-    geometry.closed_neighbours = link_edge_neighbours(closed_ids, geometry.closed.patch);
-    geometry.open_neighbours = link_edge_neighbours(open_ids, geometry.open.patch);
-    mark_crossable(scene, closed_ids, geometry.closed_planes, geometry.closed_neighbours);
-    mark_crossable(scene, open_ids, geometry.open_planes, geometry.open_neighbours);
-  }
   return geometry;
+}
+
+void link_tile_neighbours(const LightSpaceScene& scene, TileGeometry& geometry) {
+  geometry.closed_neighbours = link_edge_neighbours(geometry.closed_ids, geometry.closed.patch);
+  geometry.open_neighbours = link_edge_neighbours(geometry.open_ids, geometry.open.patch);
+  mark_crossable(scene, geometry.closed_ids, geometry.closed_planes, geometry.closed_neighbours);
+  mark_crossable(scene, geometry.open_ids, geometry.open_planes, geometry.open_neighbours);
 }
 
 }  // namespace shadowtiles

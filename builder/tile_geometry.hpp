@@ -76,7 +76,12 @@ struct TileGeometry {
 };
 
 // Every triangle of `tile` (and its patches, in the closed set) with its flags and plane; with
-// `with_neighbours`, also the edge neighbours and vertex ids the entry rule needs.
+// `with_neighbours`, also the vertex ids link_tile_neighbours needs.
 TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile, bool with_neighbours);
+
+// The entry rule's edge neighbours of a geometry gathered `with_neighbours`: the triangle across
+// each edge, and whether it lies on the edge's other side. Apart from the gather, so a build times
+// it as the entry rule's work rather than the ray casting's.
+void link_tile_neighbours(const LightSpaceScene& scene, TileGeometry& geometry);
 
 }  // namespace shadowtiles
