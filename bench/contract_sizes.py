@@ -79,6 +79,12 @@ def row_order(line, res_cell, contract_cell):
     return (res_value(cells[res_cell]), cells[0], cells[contract_cell])
 
 
+def embree_kernels(build_time):
+    """The Embree versions and native ray-packet widths the build-time runs recorded."""
+    return {f"{e['stats']['embree']['version']} in {e['stats']['embree']['native_ray_packet']}-wide packets"
+            for e in build_time.values() if "embree" in e.get("stats", {})}
+
+
 def section(entries, sources, commits, build_time, kept=None):
     kept = kept or {"sizes": [], "errors": [], "over_cpvs": [], "sources": "", "receiver_counts": []}
     lines = [BEGIN, "## Receiver contracts: bytes at rest under both", "",
@@ -93,6 +99,8 @@ def section(entries, sources, commits, build_time, kept=None):
              "of a build of MH, MMH and DAG-MH in one run (issue 14's build-time figure" +
              (f"; those runs in {', '.join(sorted({str(e['_tile']) + '^2' for e in build_time.values() if e.get('_tile')}))} tiles"
               if any(e.get("_tile") for e in build_time.values()) else "") +
+             # The rays' kernels set the ratio's denominator (docs/build-time.md, session 39); builds record them since then.
+             (f", rays by Embree {' and '.join(sorted(embree_kernels(build_time)))}" if embree_kernels(build_time) else "") +
              "; `*`: of the six-method build, "
              "where no such run is given). Rows (scene, resolution, contract) not in these runs are kept from the report's "
              "previous regeneration" + (f" ({kept['sources']})" if kept["sizes"] and kept["sources"] else "") + ".", "",

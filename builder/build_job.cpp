@@ -548,6 +548,7 @@ Result<BuildSummary> run_build(const BuildConfig& config) {
 
   // 6. Finish: stats, meta marked complete, one sync.
   BuildSummary summary = summarize(*build, *index, *tiles, *top_bytes, times, total_start);
+  summary.stats["embree"] = {{"version", device->version()}, {"native_ray_packet", device->native_ray_packet()}};
   if (Status s = finish(db, meta, summary, total_start); !s) return s.error();
   if (config.report_tile_costs) {  // in the printed summary only, never in the meta
     nlohmann::json costs = nlohmann::json::array();

@@ -20,6 +20,19 @@ Result<EmbreeDevice> EmbreeDevice::create() {
   return EmbreeDevice(device);
 }
 
+std::string EmbreeDevice::version() const {
+  auto part = [&](RTCDeviceProperty p) { return std::to_string(rtcGetDeviceProperty(device_, p)); };
+  return part(RTC_DEVICE_PROPERTY_VERSION_MAJOR) + "." + part(RTC_DEVICE_PROPERTY_VERSION_MINOR) + "." +
+         part(RTC_DEVICE_PROPERTY_VERSION_PATCH);
+}
+
+int EmbreeDevice::native_ray_packet() const {
+  if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED)) return 16;
+  if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED)) return 8;
+  if (rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED)) return 4;
+  return 1;
+}
+
 EmbreeDevice::~EmbreeDevice() {
   if (device_) rtcReleaseDevice(device_);
 }

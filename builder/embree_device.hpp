@@ -3,6 +3,8 @@
 // from it may be built and traced concurrently on different threads.
 #pragma once
 
+#include <string>
+
 #include <embree3/rtcore.h>
 
 #include "common/result.hpp"
@@ -17,6 +19,11 @@ class EmbreeDevice {
   EmbreeDevice(const EmbreeDevice&) = delete;
   ~EmbreeDevice();
   RTCDevice get() const { return device_; }
+  // What Embree runs on this host, for a build's record: its version ("3.13.5") and the widest ray
+  // packet its kernels trace natively (16: AVX-512, 8: AVX/AVX2, 4: SSE). Ray-casting rates, and so
+  // the build-time ratio, depend on it (docs/build-time.md, session 39).
+  std::string version() const;
+  int native_ray_packet() const;
 
  private:
   explicit EmbreeDevice(RTCDevice device) : device_(device) {}

@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "builder/accuracy.hpp"
 #include "builder/build_job.hpp"
+#include "builder/embree_device.hpp"  // RTC_VERSION_*: the Embree this binary was built against
 #include "builder/ground_truth.hpp"
 #include "builder/receiver_sampler.hpp"
 #include "builder/scene_loader.hpp"
@@ -281,6 +283,12 @@ TEST(Cli, DefaultBuildStoresDagmhRecordsUpAxisAndHintsAtOpenMeshes) {
   EXPECT_GT(stats["seconds"]["ray_casting_wall"].get<double>(), 0.0);
   EXPECT_TRUE(stats["seconds"].contains("caps_thread_sum"));
   EXPECT_GE(stats["wall_over_ray_casting"].get<double>(), 1.0);
+  // What the rays ran on (the ratio depends on it): the Embree this binary runs, its packet width.
+  EXPECT_EQ(stats["embree"]["version"].get<std::string>(), std::to_string(RTC_VERSION_MAJOR) + "." +
+                                                               std::to_string(RTC_VERSION_MINOR) + "." +
+                                                               std::to_string(RTC_VERSION_PATCH));
+  const int packet = stats["embree"]["native_ray_packet"].get<int>();
+  EXPECT_TRUE(packet == 4 || packet == 8 || packet == 16) << packet;
   auto map = ShadowMap::open(dir.path() / "s");
   ASSERT_TRUE(map.ok());
   EXPECT_EQ((*map)->meta().methods, std::vector<store::Method>{store::Method::dagmh});
