@@ -81,7 +81,7 @@ def row_order(line, res_cell, contract_cell):
 
 def embree_kernels(build_time):
     """The Embree versions and native ray-packet widths the build-time runs recorded."""
-    return {f"{e['stats']['embree']['version']} in {e['stats']['embree']['native_ray_packet']}-wide packets"
+    return {f"{e['stats']['embree']['version']} (native width {e['stats']['embree']['native_ray_packet']} rays)"
             for e in build_time.values() if "embree" in e.get("stats", {})}
 
 
@@ -100,7 +100,9 @@ def section(entries, sources, commits, build_time, kept=None):
              (f"; those runs in {', '.join(sorted({str(e['_tile']) + '^2' for e in build_time.values() if e.get('_tile')}))} tiles"
               if any(e.get("_tile") for e in build_time.values()) else "") +
              # The rays' kernels set the ratio's denominator (docs/build-time.md, session 39); builds record them since then.
-             (f", rays by Embree {' and '.join(sorted(embree_kernels(build_time)))}" if embree_kernels(build_time) else "") +
+             (f", rays by Embree {' and '.join(sorted(embree_kernels(build_time)))}" +
+              ("" if all("embree" in e.get("stats", {}) for e in build_time.values()) else " where the runs recorded it")
+              if embree_kernels(build_time) else "") +
              "; `*`: of the six-method build, "
              "where no such run is given). Rows (scene, resolution, contract) not in these runs are kept from the report's "
              "previous regeneration" + (f" ({kept['sources']})" if kept["sizes"] and kept["sources"] else "") + ".", "",

@@ -48,7 +48,9 @@ struct DualDepthStats {
   double bvh_seconds = 0;
   double ray_seconds = 0;  // the ray casting alone (packets, counter walk)
   double cap_seconds = 0;  // the exit-cap pass (receiver_surface_caps / second_layer_caps), when on
-  double entry_seconds = 0;  // the entry rule's cover pass, when on (after the rays, not in ray_seconds)
+  // The entry rule's work, when on, not in ray_seconds: its mesh neighbours (linked before the rays),
+  // the cover pass after each row's rays, and the depth gaps after the last row.
+  double entry_seconds = 0;
   // The cap pass's work (the build JSON's "caps"): pairs and regions under `surfaces`, the texels
   // settled under both contracts.
   SecondLayerCapCounts caps;

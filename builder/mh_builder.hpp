@@ -35,7 +35,9 @@ struct MhBuildOptions {
 
 Result<MhHierarchy> build_mh(const TileIntervals& tile, const MhBuildOptions& options = {});
 
-// Input validation shared by the construction variants.
+// Input validation: finite lowers, lower <= upper, finite entry-rule bounds, one per texel. The
+// top-down build runs it first; the bottom-up build tests the same rule as it reads the texels and
+// runs this only to name the first bad texel.
 Status check_tile_intervals(const TileIntervals& tile);
 
 }  // namespace shadowtiles

@@ -411,6 +411,9 @@ Result<MergeSummary> run_merge(const MergeConfig& config) {
   for (const Shard& s : shards) shard_paths.push_back(s.path.string());
   nlohmann::json databases = nlohmann::json::object();
   for (auto& [name, t] : totals) databases[name] = {{"entries", t.entries}, {"bytes", t.bytes}};
+  // What each share's rays ran on (shards may run on different hosts): as each shard recorded it.
+  nlohmann::json embree_by_shard = nlohmann::json::array();
+  for (const Shard& s : shards) embree_by_shard.push_back(s.meta.build_stats.value("embree", nlohmann::json()));
   meta.build_stats = {
       {"tiles", {{"total", layout->tile_count()}, {"with_triangles", with_triangles}, {"stored", stored_tiles}}},
       {"rays", with_triangles * uint64_t(meta.tile_size) * meta.tile_size},
@@ -421,6 +424,7 @@ Result<MergeSummary> run_merge(const MergeConfig& config) {
                  {"copied", databases}, {"blob_bytes_copied", blob_bytes_copied},
                  {"blob_mb_per_second", copy_seconds > 0 ? blob_bytes_copied / 1e6 / copy_seconds : 0.0}}},
       {"seconds", {{"merge_copy", copy_seconds}, {"top_levels", top_seconds}}},
+      {"embree_by_shard", embree_by_shard},
       {"peak_memory_mib", peak_memory_mib()},
   };
   meta.complete = true;

@@ -1,6 +1,7 @@
 #include "builder/tile_geometry.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -131,6 +132,9 @@ TileGeometry gather_tile_geometry(const LightSpaceScene& scene, TileCoord tile, 
 }
 
 void link_tile_neighbours(const LightSpaceScene& scene, TileGeometry& geometry) {
+  // Gathered with `with_neighbours`: three vertex ids per triangle of each set.
+  assert(geometry.closed_ids.size() == 3 * geometry.closed_planes.size() &&
+         geometry.open_ids.size() == 3 * geometry.open_planes.size());
   geometry.closed_neighbours = link_edge_neighbours(geometry.closed_ids, geometry.closed.patch);
   geometry.open_neighbours = link_edge_neighbours(geometry.open_ids, geometry.open.patch);
   mark_crossable(scene, geometry.closed_ids, geometry.closed_planes, geometry.closed_neighbours);

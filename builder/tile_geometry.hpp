@@ -1,8 +1,8 @@
 // One tile's triangles as the dual-depth renderer and the entry rule see them: tile-local float
 // footprints (what Embree intersects), per-triangle flags for the hit filter, each triangle's depth
 // plane from the scene's double vertices, and, for the entry rule, which triangle lies across each
-// edge. Built per tile by gather_tile_geometry.
-// Thread safety: plain data; gather_tile_geometry only reads the scene.
+// edge. Built per tile by gather_tile_geometry, the edges' neighbours then by link_tile_neighbours.
+// Thread safety: plain data; both functions only read the scene.
 #pragma once
 
 #include <algorithm>

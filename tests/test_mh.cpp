@@ -88,6 +88,13 @@ TEST(MhBuild, RejectsMalformedInput) {
   EXPECT_FALSE(build_mh(tile).ok());
   tile.texels[5] = {-kInf, 0.4f};
   EXPECT_FALSE(build_mh(tile).ok());
+  // A 1x1 tile (no levels below the root) is tested as well.
+  TileIntervals one{1, {{std::nanf(""), 1.0f}}};
+  EXPECT_FALSE(build_mh(one).ok());
+  one.texels[0] = {0.5f, 0.6f};
+  EXPECT_TRUE(build_mh(one).ok());
+  one.entry_lower = {std::nanf("")};
+  EXPECT_FALSE(build_mh(one).ok());
   tile.texels.pop_back();
   auto r = build_mh(tile);
   ASSERT_FALSE(r.ok());

@@ -219,6 +219,11 @@ TEST_F(ShardMerge, MergeEqualsTheOneMachineBuild) {
   std::string log;
   ASSERT_EQ(run(cli() + " merge " + shards() + "--out " + out.string(), &log), 0) << log;
   expect_same_build(out, dir_->path() / "single");
+  // Each share's record of what its rays ran on is kept, in shard order.
+  const nlohmann::json embree = read_meta(out).build_stats["embree_by_shard"];
+  ASSERT_EQ(embree.size(), 4u);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(embree[size_t(i)], read_meta(shard(i)).build_stats["embree"]) << i;
+  EXPECT_TRUE(embree[0].contains("version"));
   // Merging again into the complete store is a no-op.
   ASSERT_EQ(run(cli() + " merge " + shards() + "--out " + out.string(), &log), 0) << log;
   EXPECT_NE(log.find("already holds"), std::string::npos) << log;
