@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <bit>
-#include <cmath>
 #include <limits>
 #include <string>
 
@@ -44,11 +43,11 @@ Status check_tile_intervals(const TileIntervals& tile) {
     for (float bound : tile.entry_lower) bad |= !finite_float(bound);
   if (!bad) return Status::success();
   for (size_t i = 0; i < tile.texels.size(); ++i) {
-    if (entry && !std::isfinite(tile.entry_lower[i]))
+    if (entry && !finite_float(tile.entry_lower[i]))
       return invalid("texel " + std::to_string(i) + " has an invalid entry-rule bound " +
                      std::to_string(tile.entry_lower[i]));
     const DepthInterval& t = tile.texels[i];
-    if (!std::isfinite(t.lower) || !(t.lower <= t.upper))
+    if (bad_interval(t))
       return invalid("texel " + std::to_string(i) + " has an invalid interval [" + std::to_string(t.lower) + ", " +
                      std::to_string(t.upper) + "]");
   }
