@@ -239,9 +239,12 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
 
   const double entry_before_rays = local.entry_seconds;
   auto ray_start = Clock::now();
-  // The entry rule's: the row's first-hit triangles, primitive id with the open set's flag.
+  // The entry rule's: a band of rows' first-hit triangles, primitive id with the open set's flag. The
+  // entry pass runs once per band of kEntryBand rows rather than per row, so the rays between rows
+  // do not evict a vertex's fan between its searches on consecutive rows.
   constexpr uint32_t kOpenFlag = EntryCover::kOpenFlag;
-  std::vector<uint32_t> first_hits(entry_rule ? size : 0);
+  constexpr uint32_t kEntryBand = 16;
+  std::vector<uint32_t> first_hits(entry_rule ? size_t(size) * kEntryBand : 0);
   std::array<std::vector<ClosedHit>, kPacket> lanes;
   CollectContext context;
   rtcInitIntersectContext(&context.base);
@@ -256,14 +259,15 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
   std::vector<uint32_t> gap_candidates;  // texels no cover lowered that the depth gap may (row-major)
   auto entry_row = [&](uint32_t v) {
     const size_t row = size_t(v) * size;
-    entry_cover.bound_row(v, first_hits, std::span(intervals.texels).subspan(row, size),
+    const std::span<const uint32_t> row_hits = std::span(first_hits).subspan(size_t(v % kEntryBand) * size, size);
+    entry_cover.bound_row(v, row_hits, std::span(intervals.texels).subspan(row, size),
                           std::span(intervals.entry_lower).subspan(row, size));
     for (uint32_t u = 0; u < size; ++u) {
       const size_t i = row + u;
       const float lower = intervals.texels[i].lower;
       if (lower >= 1.0f) continue;
-      const bool open = (first_hits[u] & kOpenFlag) != 0;
-      const uint32_t prim = first_hits[u] & ~kOpenFlag;
+      const bool open = (row_hits[u] & kOpenFlag) != 0;
+      const uint32_t prim = row_hits[u] & ~kOpenFlag;
       if (intervals.entry_lower[i] >= lower &&
           gap_may_lower((open ? geometry.open_planes : geometry.closed_planes)[prim], double(tile_u0) + u + 0.5,
                         double(tile_v0) + v + 0.5, lower, options_.entry_slack, options_.entry_tolerance))
@@ -303,15 +307,15 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
           hit.t = (hit.open ? geometry.open_planes : geometry.closed_planes)[hit.prim].at(centre_u, centre_v, hit.t);
         DepthInterval interval = surfaces ? resolve_surfaces_interval(lanes[lane], options_)
                                           : resolve_interval(lanes[lane], open_t, options_);
-        if (entry_rule && interval.lower < 1.0f) first_hits[u_start + lane] =
+        if (entry_rule && interval.lower < 1.0f) first_hits[size_t(v % kEntryBand) * size + u_start + lane] =
               lanes[lane].front().prim | (lanes[lane].front().open ? kOpenFlag : 0);
         intervals.at(u_start + lane, v) = interval;
         if (interval.lower < 1.0f) ++local.hits;
       }
     }
-    if (entry_rule) {
+    if (entry_rule && (v % kEntryBand == kEntryBand - 1 || v + 1 == size)) {
       const auto entry_start = Clock::now();
-      entry_row(v);
+      for (uint32_t band_row = v - v % kEntryBand; band_row <= v; ++band_row) entry_row(band_row);
       local.entry_seconds += seconds_since(entry_start);
     }
   }

@@ -51,20 +51,24 @@ float entry_lower_by_search(const TileGeometry& geometry, bool open, uint32_t fi
     return positive != 4 && negative != 4;
   };
   std::array<int32_t, kMaxCoverTriangles> cover;
-  int count = 0;
-  cover[count++] = int32_t(first_prim);
+  // The edge each triangle was reached across (-1: the first). Its test is skipped when the way back
+  // is crossable too: met or not, it leads to a triangle already in the cover.
+  std::array<int32_t, kMaxCoverTriangles> entered;
+  cover[0] = int32_t(first_prim), entered[0] = -1;
+  int count = 1;
   for (int i = 0; i < count; ++i) {
     const int32_t prim = cover[size_t(i)];
     if (planes[size_t(prim)].edge_on) return lower;
     const float* x = &vertices[size_t(prim) * 9];
     for (int k = 0; k < 3; ++k) {
-      const int j = (k + 1) % 3;
-      if (!edge_meets_square(x + 3 * k, x + 3 * j)) continue;
       const EdgeNeighbour across = neighbours[size_t(prim)][size_t(k)];
+      if (k == entered[size_t(i)] && across.crossable) continue;
+      if (!edge_meets_square(x + 3 * k, x + 3 * ((k + 1) % 3))) continue;
       if (!across.crossable) return lower;  // none, edge-on, or folded under
       if (std::find(cover.begin(), cover.begin() + count, across.prim) != cover.begin() + count) continue;
       if (count == kMaxCoverTriangles) return lower;
-      cover[size_t(count++)] = across.prim;
+      cover[size_t(count)] = across.prim, entered[size_t(count)] = across.edge;
+      ++count;
     }
   }
   // A triangle's largest depth over its part of the square is at most its plane's over the whole
@@ -81,12 +85,6 @@ float entry_lower_by_search(const TileGeometry& geometry, bool open, uint32_t fi
 }
 
 }  // namespace
-
-float entry_bound(double deepest, float lower, float slack, float tolerance) {
-  const double entry = deepest + double(tolerance) - double(slack);
-  if (entry >= double(lower)) return lower;
-  return std::clamp(next_float_up(float_at_least(entry)), 0.0f, lower);
-}
 
 // The entry pass over a tile, in the common cases first: a square inside its first-hit triangle, or
 // inside it and the triangle across the one edge that crosses it (the cover entry_lower would grow).
@@ -113,7 +111,19 @@ class EntryCover::Fast {
     const Triangle& triangle = entry.triangle;
     const RowLine edge[3] = {triangle.edge[0].at_row(gv), triangle.edge[1].at_row(gv), triangle.edge[2].at_row(gv)};
     const RowPlane own_plane = triangle.plane.at_row(gv);
+    // Each edge's test is monotone in gu (its line's value is a chain of rounded, monotone steps), so
+    // the squares inside all three are one range of the run: found from both ends, then not tested.
+    auto inside = [&](uint32_t i) {
+      const double gu = gu_first + i;
+      return edge[0].holds(gu) && edge[1].holds(gu) && edge[2].holds(gu);
+    };
+    uint32_t inside_begin = 0, inside_end = count;
+    while (inside_begin < count && !inside(inside_begin)) ++inside_begin;
+    while (inside_end > inside_begin && !inside(inside_end - 1)) --inside_end;
+    for (uint32_t i = inside_begin; i < inside_end; ++i) out[i] = own_plane.deepest(gu_first + i);
     for (uint32_t i = 0; i < count; ++i) {
+      if (i == inside_begin) i = inside_end;  // (the range is empty only when inside_begin == count)
+      if (i == count) break;
       const double gu = gu_first + i;
       const bool inside0 = edge[0].holds(gu), inside1 = edge[1].holds(gu), inside2 = edge[2].holds(gu);
       const double own = own_plane.deepest(gu);
@@ -256,16 +266,43 @@ void EntryCover::bound_row(uint32_t v, std::span<const uint32_t> first_hits, std
     const bool open = (key & kOpenFlag) != 0;
     const uint32_t prim = key & ~kOpenFlag;
     fast_->deepest_run(key, open, prim, tile_u0_ + u + 0.5, end - u, gv, run_deepest_.data());
+    bool searched = false;
     for (uint32_t w = u; w < end; ++w) {
       const double deepest = run_deepest_[w - u];
-      const float lower = row[w].lower;
-      entry_lower[w] = deepest == deepest
-                           ? entry_bound(deepest, lower, slack_, tolerance_)
-                           : entry_lower_by_search(geometry_, open, prim, w + 0.5, v + 0.5, tile_u0_ + w + 0.5, gv,
-                                                   lower, slack_, tolerance_);
+      if (deepest == deepest) {
+        entry_lower[w] = entry_bound(deepest, row[w].lower, slack_, tolerance_);
+      } else {
+        searches_.push_back({w, key});
+        searched = true;
+      }
     }
+    if (searched) prefetch_triangle(open, prim);
     u = end;
   }
+  // The searches after the row's runs, their triangles fetched ahead: a search walks a vertex's fan
+  // through the neighbour lists, and a cold triangle stalls it.
+  constexpr size_t kAhead = 4;
+  for (size_t j = 0; j < searches_.size(); ++j) {
+    if (j + kAhead < searches_.size()) {
+      const uint32_t ahead = searches_[j + kAhead].key;
+      const bool ahead_open = (ahead & kOpenFlag) != 0;
+      const auto& neighbours = ahead_open ? geometry_.open_neighbours : geometry_.closed_neighbours;
+      for (const EdgeNeighbour& n : neighbours[ahead & ~kOpenFlag])
+        if (n.prim >= 0) prefetch_triangle(ahead_open, uint32_t(n.prim));
+    }
+    const auto [w, key] = searches_[j];
+    entry_lower[w] = entry_lower_by_search(geometry_, (key & kOpenFlag) != 0, key & ~kOpenFlag, w + 0.5, v + 0.5,
+                                           tile_u0_ + w + 0.5, gv, row[w].lower, slack_, tolerance_);
+  }
+  searches_.clear();
+}
+
+void EntryCover::prefetch_triangle(bool open, uint32_t prim) const {
+  const float* vertices = &(open ? geometry_.open_vertices : geometry_.closed_vertices)[size_t(prim) * 9];
+  __builtin_prefetch(vertices);
+  __builtin_prefetch(vertices + 8);
+  __builtin_prefetch(&(open ? geometry_.open_planes : geometry_.closed_planes)[prim]);
+  __builtin_prefetch(&(open ? geometry_.open_neighbours : geometry_.closed_neighbours)[prim]);
 }
 
 }  // namespace shadowtiles

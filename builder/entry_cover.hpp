@@ -5,6 +5,7 @@
 // Thread safety: one instance per tile and thread (it caches the last triangle's edge lines).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -13,13 +14,19 @@
 #include "builder/depth_interval.hpp"
 #include "builder/light_space_scene.hpp"
 #include "builder/tile_geometry.hpp"
+#include "common/float_rounding.hpp"
 
 namespace shadowtiles {
 
 // min(lower, deepest + tolerance - slack), rounded up to a float and one float step more: never
 // below the exact bound, nor below verify's reference (builder/reference_entry_bounds.hpp), which
-// evaluates the same planes another way. `lower` when that is not smaller.
-float entry_bound(double deepest, float lower, float slack, float tolerance);
+// evaluates the same planes another way. `lower` when that is not smaller. Inline, with selects for
+// branches: the entry pass takes it for most hit texels, and which way it goes varies texel by texel.
+inline float entry_bound(double deepest, float lower, float slack, float tolerance) {
+  const double entry = deepest + double(tolerance) - double(slack);
+  const float bound = std::clamp(next_float_up(float_at_least(entry)), 0.0f, lower);
+  return entry >= double(lower) ? lower : bound;
+}
 
 class EntryCover {
  public:
@@ -47,7 +54,14 @@ class EntryCover {
   double tile_u0_, tile_v0_;
   float slack_, tolerance_;
   std::unique_ptr<Fast> fast_;
+  // Asks the cache for a triangle's vertices, plane and neighbours (a search reads all three).
+  void prefetch_triangle(bool open, uint32_t prim) const;
+
   std::vector<double> run_deepest_;  // bound_row's per-run scratch
+  struct Search {
+    uint32_t u, key;  // a texel of the row that needs entry_lower_by_search, and its first hit
+  };
+  std::vector<Search> searches_;  // bound_row's, in u order
 };
 
 }  // namespace shadowtiles

@@ -179,18 +179,17 @@ bool behind_near_front_edges(const Prepared& back, const Prepared& front, double
   // below are blends of these (the test below would find no edge exceeding it). Most mesh
   // neighbours end here, before the edge functions (30 % of honolulu's calls, half of oahu's).
   if (!(excess[0] > 0) && !(excess[1] > 0) && !(excess[2] > 0)) return false;
-  std::array<std::array<double, 3>, 3> f;  // f[k][i]: back's vertex i against front's widened edge k
+  // One edge at a time, stopping at the first whose part keeps nothing behind by the threshold: an
+  // edge with `back` wholly outside it (apart) has no vertex inside and no crossing, so it is one too.
   for (int k = 0; k < 3; ++k) {
     const LightSpacePoint& e = front.p[k];
+    std::array<double, 3> f;  // back's vertex i against front's widened edge k
     for (int i = 0; i < 3; ++i)
-      f[k][i] = front.A[k] * (back.p[i].u - e.u) + front.B[k] * (back.p[i].v - e.v) + front.widen[k];
-    if (f[k][0] < 0 && f[k][1] < 0 && f[k][2] < 0) return false;  // apart across this edge
-  }
-  for (int k = 0; k < 3; ++k) {
+      f[i] = front.A[k] * (back.p[i].u - e.u) + front.B[k] * (back.p[i].v - e.v) + front.widen[k];
     bool exceeds = false;
     for (int i = 0; i < 3 && !exceeds; ++i) {
       const int j = i == 2 ? 0 : i + 1;
-      const double fi = f[k][i], fj = f[k][j];
+      const double fi = f[i], fj = f[j];
       if (fi >= 0) exceeds = excess[i] > 0;
       // The crossing, (fi e_j - fj e_i) / (fi - fj) with one of fi, fj negative: the sign of the sum.
       if (!exceeds && (fi >= 0) != (fj >= 0)) exceeds = fi >= 0 ? excess[i] * -fj + excess[j] * fi > 0

@@ -10,17 +10,19 @@
 
 namespace shadowtiles {
 
-// The next float above a finite `f` (std::nextafter without the library call: builds take it per texel).
+// The next float above a finite `f` (std::nextafter without the library call: builds take it per
+// texel), written with selects so that it compiles without branches.
 inline float next_float_up(float f) {
-  if (f == 0.0f) return std::numeric_limits<float>::denorm_min();
   const uint32_t bits = std::bit_cast<uint32_t>(f);
-  return std::bit_cast<float>(f > 0.0f ? bits + 1 : bits - 1);
+  const float stepped = std::bit_cast<float>(f > 0.0f ? bits + 1 : bits - 1);
+  return f == 0.0f ? std::numeric_limits<float>::denorm_min() : stepped;
 }
 
-// The smallest float not below `x`.
+// The smallest float not below `x` (both steps computed, then one picked: no branch).
 inline float float_at_least(double x) {
   const float f = float(x);
-  return double(f) < x ? next_float_up(f) : f;
+  const float up = next_float_up(f);
+  return double(f) < x ? up : f;
 }
 
 // The largest float not above `x`.

@@ -74,10 +74,12 @@ struct Rendered {
   TileIntervals intervals;          // render(): first hits in lower, the rule's bounds beside
 };
 
-Rendered render(const Scene& scene) {
+// The map as one tile of kResolution^2, or tile `tile` of a layout of `tile_size`^2 tiles (its
+// intervals indexed by the tile's own texels).
+Rendered render(const Scene& scene, uint32_t tile_size = kResolution, TileCoord tile = {0, 0}) {
   auto frame = LightFrame::fit({0, 0, -1}, scene.bounds, kResolution);
   EXPECT_TRUE(frame.ok());
-  auto layout = TileLayout::make(kResolution, kResolution);
+  auto layout = TileLayout::make(kResolution, tile_size);
   LightSpaceScene light_scene(scene, *frame, *layout);
   auto device = EmbreeDevice::create();
   EXPECT_TRUE(device.ok());
@@ -91,9 +93,34 @@ Rendered render(const Scene& scene) {
   options.entry_slack = float(slack);
   options.entry_tolerance = float(entry_tolerance_depth(*frame, scene.bounds));
   DualDepthRenderer renderer(*device, light_scene, options);
-  auto intervals = renderer.render({0, 0});
+  auto intervals = renderer.render(tile);
   EXPECT_TRUE(intervals.ok());
   return {*frame, slack, options.entry_tolerance, options.exit_margin, std::move(*intervals)};
+}
+
+// The renderer runs the entry pass per band of rows; a tile with fewer rows than a band (8 here)
+// must get its bounds all the same: every texel the one-tile map lowers, away from the small tiles'
+// borders (where a square's cover may reach a triangle the small tile does not gather), is lowered
+// to the same bound in its 8^2 tile.
+TEST(EntryRule, TilesSmallerThanTheEntryPassBandGetTheSameBounds) {
+  const Scene scene = step_scene();
+  const Rendered whole = render(scene);
+  constexpr uint32_t kSmall = 8;
+  uint64_t compared = 0;
+  for (uint32_t ty = 0; ty < kResolution / kSmall; ++ty)
+    for (uint32_t tx = 0; tx < kResolution / kSmall; ++tx) {
+      const Rendered part = render(scene, kSmall, {tx, ty});
+      for (uint32_t v = 1; v + 1 < kSmall; ++v)
+        for (uint32_t u = 1; u + 1 < kSmall; ++u) {
+          const size_t global = size_t(ty * kSmall + v) * kResolution + tx * kSmall + u;
+          const float first = whole.intervals.texels[global].lower, entry = whole.intervals.entry_lower[global];
+          if (!(entry < first)) continue;
+          ++compared;
+          EXPECT_EQ(part.intervals.texels[size_t(v) * kSmall + u].lower, first) << tx << "," << ty << " " << u << "," << v;
+          EXPECT_EQ(part.intervals.entry_lower[size_t(v) * kSmall + u], entry) << tx << "," << ty << " " << u << "," << v;
+        }
+    }
+  EXPECT_GT(compared, uint64_t(kResolution) * kResolution / 4);  // most of the map is lowered
 }
 
 TEST(EntryRule, EveryLitReceiverRawLightsStaysLit) {
