@@ -254,7 +254,7 @@ Result<TileIntervals> DualDepthRenderer::render_centre(TileCoord tile, DualDepth
   alignas(64) int valid[kPacket];
   const float inf = std::numeric_limits<float>::infinity();
   const uint64_t tile_u0 = uint64_t(tile.x) * size, tile_v0 = uint64_t(tile.y) * size;
-  // The entry rule's pass runs row by row while the row is in cache, timed apart from the rays.
+  // The entry rule's pass, row by row over a band of rows after their rays, timed apart from them.
   EntryCover entry_cover(geometry, tile, size, options_.entry_slack, options_.entry_tolerance);
   std::vector<uint32_t> gap_candidates;  // texels no cover lowered that the depth gap may (row-major)
   auto entry_row = [&](uint32_t v) {

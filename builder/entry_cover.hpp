@@ -1,7 +1,7 @@
 // The `surfaces` contract's entry rule (docs/receiver-contracts.md, "The entry rule") for one tile:
 // per hit texel, a cover of its square by triangles (the first-hit triangle, grown across shared
 // edges) and the bound min(first hit, the cover's largest depth over the square + tolerance - slack),
-// rounded up. The renderer feeds it row by row after the row's rays.
+// rounded up. The renderer feeds it row by row, a band of rows after their rays.
 // Thread safety: one instance per tile and thread (it caches the last triangle's edge lines).
 #pragma once
 
