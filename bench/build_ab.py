@@ -9,13 +9,13 @@ A and B are two executables (B defaults to A) and/or two sets of extra build opt
 (from --config, with the bench's sun, up axis and heightfields) is built A, B, A, B, ... --runs times
 each, from an empty store every time. Per scene it prints:
   - whether the first pair's stores hold the same build (`shadowtiles store-diff`: tiles, tile info,
-    previews and top levels byte for byte, the meta equal but for timings), and if not, the bytes
-    each side stores per method;
+    previews and top levels byte for byte, the meta equal but for timings; builds are deterministic,
+    so one pair tells), and if not, store-diff's first difference and the bytes each side stores;
   - per pair, A's process CPU seconds (user + system) and wall/rays over B's, and their medians
     (below 1: A costs less); pairing keeps a ratio meaningful while the machine's speed drifts;
   - per phase (the build's own thread-second timers), the median of A and of B, and each phase over
     the same run's rays (a phase's share, which the host's speed moves less than its seconds).
-With --json FILE the runs' figures are written too.
+With --json FILE the runs' figures are written too (after every scene).
 """
 import argparse
 import json
@@ -104,7 +104,7 @@ def main():
         for name in names:
             scene = by_name[name]
             runs = {"A": [], "B": []}
-            same = None
+            same, difference = None, []
             for r in range(args.runs):
                 stores = {}
                 for side in ("A", "B"):
@@ -118,12 +118,14 @@ def main():
                     if diff.returncode not in (0, 3):
                         sys.exit(f"store-diff failed ({diff.returncode}):\n{diff.stdout}{diff.stderr}")
                     same = diff.returncode == 0
+                    difference = (diff.stdout + diff.stderr).strip().splitlines()[:1]
                 for store in stores.values():
                     shutil.rmtree(store, ignore_errors=True)
             cpu = [a["cpu_s"] / b["cpu_s"] for a, b in zip(runs["A"], runs["B"])]
             ratio = [wall_over_rays(a) / wall_over_rays(b) for a, b in zip(runs["A"], runs["B"])]
             print(f"## {name}: stores {'the same build' if same else 'DIFFER'}")
-            if not same:  # what each side stores (the first pair's; a build's bytes do not vary)
+            if not same:  # where (store-diff's first difference), and what each side stores
+                print(f"store-diff: {difference[0] if difference else '(no message)'}")
                 for side in ("A", "B"):
                     stored = runs[side][0]["stats"].get("bytes_by_method", {})
                     print(f"{side} stores " + ", ".join(f"{m} {b:,} B" for m, b in sorted(stored.items())))
@@ -137,25 +139,24 @@ def main():
                 a, b = (statistics.median(value(run) for run in runs[side]) for side in ("A", "B"))
                 print(f"| {label} | {a:.3f} | {b:.3f} | | |")
             for phase in PHASES:
-                def of(run, phase=phase):
-                    return run["stats"]["seconds"].get(phase, 0.0)
-
-                def share(run, phase=phase):
-                    rays = run["stats"]["seconds"]["rays_thread_sum"]
-                    return of(run) / rays if rays > 0 else 0.0
-
-                a, b = (statistics.median(of(run) for run in runs[side]) for side in ("A", "B"))
-                sa, sb = (statistics.median(share(run) for run in runs[side]) for side in ("A", "B"))
-                print(f"| {phase} | {a:.3f} | {b:.3f} | {sa:.3f} | {sb:.3f} |")
+                cells = []
+                for side in ("A", "B"):  # a binary older than a phase's timer has none: "-", not 0
+                    timed = [run["stats"]["seconds"] for run in runs[side] if phase in run["stats"]["seconds"]]
+                    cells.append(f"{statistics.median(t[phase] for t in timed):.3f}" if timed else "-")
+                for side in ("A", "B"):
+                    timed = [run["stats"]["seconds"] for run in runs[side] if phase in run["stats"]["seconds"]]
+                    shares = [t[phase] / t["rays_thread_sum"] for t in timed if t["rays_thread_sum"] > 0]
+                    cells.append(f"{statistics.median(shares):.3f}" if shares else "-")
+                print(f"| {phase} | " + " | ".join(cells) + " |")
             print()
-            report["scenes"].append({"scene": name, "same_build": same, "cpu_a_over_b": cpu,
-                                     "wall_over_rays_a_over_b": ratio, "runs": runs})
+            report["scenes"].append({"scene": name, "same_build": same, "first_difference": difference,
+                                     "cpu_a_over_b": cpu, "wall_over_rays_a_over_b": ratio, "runs": runs})
+            if args.json:  # after every scene, so a later failure keeps what was measured
+                with open(args.json, "w") as f:
+                    json.dump(report, f, indent=1)
     finally:
         if not args.work:
             shutil.rmtree(work, ignore_errors=True)
-    if args.json:
-        with open(args.json, "w") as f:
-            json.dump(report, f, indent=1)
 
 
 if __name__ == "__main__":

@@ -27,20 +27,30 @@ def ab(tmp, *extra):
 with tempfile.TemporaryDirectory() as tmp:
     text, same = ab(tmp)
     assert same["same_build"] is True, text
-    assert "fzk_haus: stores the same build" in text, text
-    for side in ("A", "B"):
-        seconds = same["runs"][side][0]["stats"]["seconds"]
-        assert seconds["rays_thread_sum"] > 0 and seconds["entry_rule_thread_sum"] > 0, seconds
-        assert same["runs"][side][0]["cpu_s"] > 0
-    assert len(same["cpu_a_over_b"]) == 1 and same["cpu_a_over_b"][0] > 0
-    for phase in ("rays_thread_sum", "caps_thread_sum", "entry_rule_thread_sum", "encode_thread_sum"):
-        assert f"| {phase} |" in text, text
+    assert "fzk_haus: stores the same build" in text and "store-diff:" not in text, text
+    assert len(same["cpu_a_over_b"]) == 1
+    a, b = same["runs"]["A"][0], same["runs"]["B"][0]
+    assert abs(same["cpu_a_over_b"][0] - a["cpu_s"] / b["cpu_s"]) < 1e-9, same
 
+
+    def row(text, label):  # a phase row's four cells: A, B, A / rays, B / rays
+        line = next(l for l in text.splitlines() if l.startswith(f"| {label} |"))
+        return [c.strip() for c in line.strip("|").split("|")[1:]]
+
+    # The printed medians (one run each) are the runs' own figures.
+    for phase in ("rays_thread_sum", "caps_thread_sum", "entry_rule_thread_sum", "encode_thread_sum"):
+        cells = row(text, phase)
+        for side, cell in zip(("A", "B"), cells[:2]):
+            assert cell == f"{same['runs'][side][0]['stats']['seconds'][phase]:.3f}", (phase, cells)
+    assert row(text, "rays_thread_sum")[2:] == ["1.000", "1.000"], text
+
+    # Without the entry rule the tiles differ (store-diff says where), and B's entry rule is not timed.
     text, differ = ab(tmp, "--b-args=--entry-slack-texels 0")
     assert differ["same_build"] is False, text
-    assert "fzk_haus: stores DIFFER" in text, text
+    assert "fzk_haus: stores DIFFER" in text and "store-diff: different: tiles" in text, text
     assert differ["runs"]["B"][0]["stats"]["seconds"]["entry_rule_thread_sum"] == 0, differ["runs"]["B"][0]
     assert differ["runs"]["A"][0]["stats"]["seconds"]["entry_rule_thread_sum"] > 0
+    assert row(text, "entry_rule_thread_sum")[1] == "0.000", text
 
     # A scene the config does not have is an error, not an empty report.
     bad = subprocess.run([sys.executable, script, "--a", cli, "--config", config, "--scenes", "nowhere"],
