@@ -139,15 +139,13 @@ def main():
                 a, b = (statistics.median(value(run) for run in runs[side]) for side in ("A", "B"))
                 print(f"| {label} | {a:.3f} | {b:.3f} | | |")
             for phase in PHASES:
-                cells = []
+                medians, shares = [], []
                 for side in ("A", "B"):  # a binary older than a phase's timer has none: "-", not 0
                     timed = [run["stats"]["seconds"] for run in runs[side] if phase in run["stats"]["seconds"]]
-                    cells.append(f"{statistics.median(t[phase] for t in timed):.3f}" if timed else "-")
-                for side in ("A", "B"):
-                    timed = [run["stats"]["seconds"] for run in runs[side] if phase in run["stats"]["seconds"]]
-                    shares = [t[phase] / t["rays_thread_sum"] for t in timed if t["rays_thread_sum"] > 0]
-                    cells.append(f"{statistics.median(shares):.3f}" if shares else "-")
-                print(f"| {phase} | " + " | ".join(cells) + " |")
+                    share = [t[phase] / t["rays_thread_sum"] for t in timed if t["rays_thread_sum"] > 0]
+                    medians.append(f"{statistics.median(t[phase] for t in timed):.3f}" if timed else "-")
+                    shares.append(f"{statistics.median(share):.3f}" if share else "-")
+                print(f"| {phase} | " + " | ".join(medians + shares) + " |")
             print()
             report["scenes"].append({"scene": name, "same_build": same, "first_difference": difference,
                                      "cpu_a_over_b": cpu, "wall_over_rays_a_over_b": ratio, "runs": runs})
