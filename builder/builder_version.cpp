@@ -1,5 +1,5 @@
 #include "builder/builder_version.hpp"
 
 namespace shadowtiles {
-const char* builder_version() { return "shadowtiles-builder 0.3.4"; }
+const char* builder_version() { return "shadowtiles-builder 0.3.5"; }
 }  // namespace shadowtiles

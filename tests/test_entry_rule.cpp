@@ -319,6 +319,42 @@ TEST(EntryRule, TheReferenceFindsTheCoverOfASquareCutUpByManySmallTriangles) {
   EXPECT_LE(reference[i], r.intervals.entry_lower[i]);  // the reference is never above the renderer's bound
 }
 
+// A square crossed by two edges of its first-hit triangle T near their shared vertex V (V outside
+// the square): it is covered by T and the two triangles across those edges, so it is lowered, and
+// its bound must reach the deepest of the three over the square. One triangle across slopes down
+// away from V (the left one, then the right one), so the bound is set by it: a cover that left it
+// out would lower the texel below verify's reference, which clips every triangle to the square.
+TEST(EntryRule, ASquareCrossingTwoEdgesNearTheirVertexIsBoundedByBothTrianglesAcross) {
+  for (const bool left_deep : {true, false}) {
+    SCOPED_TRACE(left_deep ? "the left triangle across slopes down" : "the right triangle across slopes down");
+    Scene scene = floor_under_a_lid();
+    const auto frame = LightFrame::fit({0, 0, -1}, scene.bounds, kResolution);
+    ASSERT_TRUE(frame.ok());
+    const double depth = frame->to_light({5, 5, 2}).depth, deeper = frame->to_light({5, 5, 0.5}).depth;
+    auto at = [&](double u, double v, double d) { return frame->to_world({u, v, d}); };
+    // Texel (32, 32) spans [32, 33]^2; T = (V, P, Q) is 0.12 texels wide across its centre row, and
+    // the square lies inside the two triangles across's other edges (V's spokes to X and Y run wide).
+    scene.add_mesh("fan",
+                   {at(32.5, 33.3, depth) /* V */, at(31.5, 20, depth) /* P */, at(33.5, 20, depth) /* Q */,
+                    at(25, 34, left_deep ? deeper : depth) /* X */, at(40, 34, left_deep ? depth : deeper) /* Y */},
+                   Triangles{{0, 1, 2}, {0, 3, 1}, {0, 2, 4}});
+    Rendered r = render(scene);
+    ASSERT_NEAR(r.frame.texel_size(), frame->texel_size(), 1e-12);
+    LightSpaceScene light_scene(scene, r.frame, *TileLayout::make(kResolution, kResolution));
+    const std::vector<float> reference =
+        reference_entry_bounds(light_scene, {0, 0}, r.intervals, r.slack, r.tolerance, r.gap);
+    const size_t i = size_t(32) * kResolution + 32;
+    const float first = r.intervals.texels[i].lower;
+    ASSERT_NEAR(first, depth, 1e-6);  // the centre ray hits T
+    const float entry = r.intervals.entry_lower[i];
+    EXPECT_LT(entry, first);
+    EXPECT_LE(reference[i], entry);
+    // The slope counts: over the flat T and the flat triangle across alone the bound would be the
+    // first hit + tolerance - slack.
+    EXPECT_GT(double(reference[i]), double(first) + r.tolerance - r.slack + 0.1 * r.slack);
+  }
+}
+
 // fzk_haus at 512^2 under `surfaces` with the rule on at the build's default bias (2 texels), the
 // renderer's intervals (with its bounds beside) and verify's reference bounds from the centre intervals.
 struct RealScene {
