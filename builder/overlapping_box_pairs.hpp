@@ -10,6 +10,10 @@
 #include <cstdint>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "builder/receiver_surface_caps.hpp"  // TexelWindow
 
 namespace shadowtiles {
@@ -26,6 +30,22 @@ struct CellBox {
   uint32_t k;       // index in `candidates`
   uint32_t x0, y0;  // its first cell: a pair is visited in the cell of max(x0), max(y0)
 };
+// The same box in floats as {lo_u, -hi_u, lo_v, -hi_v}: a prefilter, in one four-wide comparison
+// against the other box's {hi_u, -lo_u, hi_v, -lo_v} (a cell's run is tested box against box: 254
+// million tests on honolulu 16384^2 for 22 million pairs, 11 % of them overlapping). Rounding to
+// float is monotone, so x <= y gives float(x) <= float(y): every pair the exact test keeps passes.
+struct alignas(16) CellBoxFloats {
+  float at[4];
+};
+// Whether the float boxes may overlap (`b` as stored, `a_reach` as {hi_u, -lo_u, hi_v, -lo_v}).
+inline bool may_overlap(const CellBoxFloats& b, const CellBoxFloats& a_reach) {
+#if defined(__SSE2__)
+  return _mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(b.at), _mm_load_ps(a_reach.at))) == 0xF;
+#else
+  return (b.at[0] <= a_reach.at[0]) & (b.at[1] <= a_reach.at[1]) & (b.at[2] <= a_reach.at[2]) &
+         (b.at[3] <= a_reach.at[3]);
+#endif
+}
 
 }  // namespace overlapping_box_pairs
 
@@ -34,6 +54,7 @@ struct OverlappingBoxPairsScratch {
   std::vector<overlapping_box_pairs::Box> boxes;
   std::vector<uint32_t> offsets, fill;  // the grid's cells
   std::vector<overlapping_box_pairs::CellBox> entries;
+  std::vector<overlapping_box_pairs::CellBoxFloats> entry_floats;  // beside `entries`
 };
 
 // Calls visit(i, j) once for every pair of `candidates` (indices into `prepared`, whose entries have
@@ -45,7 +66,7 @@ template <class Footprint, class Visit>
 void for_each_overlapping_pair(OverlappingBoxPairsScratch& scratch, const std::vector<Footprint>& prepared,
                                const std::vector<uint32_t>& candidates,
                                const TexelWindow& window, Visit visit) {
-  using overlapping_box_pairs::Box, overlapping_box_pairs::CellBox;
+  using overlapping_box_pairs::Box, overlapping_box_pairs::CellBox, overlapping_box_pairs::CellBoxFloats;
   if (candidates.size() < 2) return;
   constexpr double kPad = 1.0 / 256;
   std::vector<Box>& boxes = scratch.boxes;
@@ -104,21 +125,30 @@ void for_each_overlapping_pair(OverlappingBoxPairsScratch& scratch, const std::v
   for (size_t c = 1; c < offsets.size(); ++c) offsets[c] += offsets[c - 1];
   std::vector<CellBox>& entries = scratch.entries;
   entries.resize(offsets.back());
+  std::vector<CellBoxFloats>& floats = scratch.entry_floats;
+  floats.resize(offsets.back());
   std::vector<uint32_t>& fill = scratch.fill;
   fill.assign(offsets.begin(), offsets.end() - 1);
   for (uint32_t k = 0; k < boxes.size(); ++k) {
     const Box& b = boxes[k];
     const CellBox entry{b.lo_u, b.hi_u, b.lo_v, b.hi_v, k, b.x0, b.y0};
+    const CellBoxFloats entry_floats{{float(b.lo_u), -float(b.hi_u), float(b.lo_v), -float(b.hi_v)}};
     for (uint32_t y = b.y0; y <= b.y1; ++y)
-      for (uint32_t x = b.x0; x <= b.x1; ++x) entries[fill[size_t(y) * cells + x]++] = entry;
+      for (uint32_t x = b.x0; x <= b.x1; ++x) {
+        const uint32_t at = fill[size_t(y) * cells + x]++;
+        entries[at] = entry, floats[at] = entry_floats;
+      }
   }
   for (uint32_t y = 0; y < cells; ++y)
     for (uint32_t x = 0; x < cells; ++x) {
       const size_t c = size_t(y) * cells + x;
-      const CellBox* const end = entries.data() + offsets[c + 1];
-      for (const CellBox* a = entries.data() + offsets[c]; a < end; ++a) {
-        const CellBox box = *a;  // a copy: visit() may write memory the compiler cannot rule out
-        for (const CellBox* b = a + 1; b < end; ++b) {
+      const size_t end = offsets[c + 1];
+      for (size_t a = offsets[c]; a < end; ++a) {
+        const CellBox box = entries[a];  // a copy: visit() may write memory the compiler cannot rule out
+        const CellBoxFloats reach{{-floats[a].at[1], -floats[a].at[0], -floats[a].at[3], -floats[a].at[2]}};
+        for (size_t j = a + 1; j < end; ++j) {
+          if (!overlapping_box_pairs::may_overlap(floats[j], reach)) continue;
+          const CellBox* const b = &entries[j];
           if (box.lo_u > b->hi_u || b->lo_u > box.hi_u || box.lo_v > b->hi_v || b->lo_v > box.hi_v) continue;
           if (std::max(box.x0, b->x0) != x || std::max(box.y0, b->y0) != y) continue;  // cell_of is monotone
           visit(candidates[box.k], candidates[b->k]);

@@ -88,5 +88,26 @@ TEST(OverlappingBoxPairs, TinyBoxesWithAFewAsLargeAsTheTile) {
   expect_every_overlapping_pair_once(boxes, window);
 }
 
+// Padded boxes that meet or miss by a billionth of a texel, far under a float's step at these
+// coordinates, where both round to the same float: the pass prefilters in floats, so it must keep
+// every pair that meets by that little (a strict comparison would drop them), and its exact test
+// must still drop those that miss.
+TEST(OverlappingBoxPairs, BoxesThatMeetOrMissByLessThanAFloatStep) {
+  constexpr double kPad = 1.0 / 256;
+  for (uint32_t size : {64u, 2048u}) {
+    const TexelWindow window{3.0 * size, 5.0 * size, size};
+    std::mt19937 rng(size);
+    std::uniform_real_distribution<double> at(1.0, size - 3.0);
+    std::vector<Footprint> boxes;
+    for (int i = 0; i < 400; ++i) {
+      const double edge = window.u0 + at(rng), v = window.v0 + at(rng);
+      const double gap = (i % 2 ? 1e-9 : -1e-9);  // the next box starts just past or just before the reach
+      boxes.push_back({edge - 1.0, edge, v, v + 0.5});
+      boxes.push_back({edge + 2 * kPad + gap, edge + 1.0, v + 0.25, v + 0.75});
+    }
+    expect_every_overlapping_pair_once(boxes, window);
+  }
+}
+
 }  // namespace
 }  // namespace shadowtiles
