@@ -70,11 +70,11 @@ ShadowMap::ShadowMap(std::shared_ptr<const TileSource> source, StoreMeta meta, L
 
 namespace {
 
-// Per-thread pins (see the header): direct-mapped by tile, valid for one map id and one eviction
-// epoch of that map. Only the owning thread reads or writes its table. 32 x 32 neighbouring tiles of
-// one method never collide: with 64 slots (8 x 8), random points over a 16384^2 map in 1024^2 tiles
-// went through the locked cache on most lookups, and single-point rates fell to a quarter.
-constexpr size_t kPinSlots = 1024;
+// Per-thread pins (see the header): direct-mapped by tile, sized for the map in use (a slot per tile
+// of a method, up to kMaxPinSide tiles a side), valid for one map id and one eviction epoch of that
+// map. Only the owning thread reads or writes its table. (A fixed 8 x 8 table sent most random
+// points over a 16384^2 map in 1024^2 tiles through the locked cache: a quarter of the rate.)
+constexpr uint32_t kMinPinSide = 8, kMaxPinSide = 128;  // 64 to 16,384 slots (2 KiB to 512 KiB)
 struct alignas(64) TilePins {
   struct Pin {
     uint64_t key = 0;  // packed method/x/y; 0 = unused (method bytes start at 1)
@@ -84,13 +84,20 @@ struct alignas(64) TilePins {
   uint64_t map_id = 0;
   uint64_t epoch = 0;
   uint64_t unreported_hits = 0;  // added to the shared stats at the next locked lookup
-  std::array<Pin, kPinSlots> pins;
-  // The slots in use, so that dropping the pins (at each eviction epoch) costs what is pinned.
-  std::array<uint16_t, kPinSlots> used{};
-  size_t used_count = 0;
+  uint32_t side_bits = 0;        // the table is (1 << side_bits)^2 slots
+  std::vector<Pin> pins;
+  std::vector<uint32_t> used;  // the slots in use: dropping the pins costs what is pinned
   void drop_all() {
-    for (size_t i = 0; i < used_count; ++i) pins[used[i]] = Pin{};
-    used_count = 0;
+    for (const uint32_t slot : used) pins[slot] = Pin{};
+    used.clear();
+  }
+  // For a map of `tiles_per_side`: a slot per tile up to kMaxPinSide a side (the pins dropped).
+  void size_for(uint32_t tiles_per_side) {
+    drop_all();
+    const uint32_t side = std::clamp(std::bit_ceil(std::max(tiles_per_side, 1u)), kMinPinSide, kMaxPinSide);
+    if (pins.size() == size_t(side) * side) return;
+    side_bits = uint32_t(std::countr_zero(side));
+    pins = std::vector<Pin>(size_t(side) * side);
   }
   ~TilePins();
 };
@@ -111,9 +118,11 @@ TilePins& thread_pins() {
 inline uint64_t pin_key(store::Method method, uint32_t x, uint32_t y) {
   return (uint64_t(uint8_t(method)) << 56) | (uint64_t(x & 0xfffffff) << 28) | (y & 0xfffffff);
 }
-// 32 x 32 neighbouring tiles of one method never collide; methods are spread apart.
-inline size_t pin_slot(store::Method method, uint32_t x, uint32_t y) {
-  return ((x & 31u) | ((y & 31u) << 5)) ^ ((uint32_t(uint8_t(method)) * 341u) & 1023u);
+// Neighbouring tiles of one method (a block as wide as the table) never collide; methods are spread
+// apart.
+inline size_t pin_slot(const TilePins& pins, store::Method method, uint32_t x, uint32_t y) {
+  const uint32_t side_mask = (1u << pins.side_bits) - 1, slot_mask = (1u << (2 * pins.side_bits)) - 1;
+  return ((x & side_mask) | ((y & side_mask) << pins.side_bits)) ^ ((uint32_t(uint8_t(method)) * 341u) & slot_mask);
 }
 
 }  // namespace
@@ -142,7 +151,7 @@ inline bool ShadowMap::pinned_tile(store::Method method, uint32_t x, uint32_t y,
                                    Error* error) const {
   TilePins* pins = t_pins;
   if (pins && pins->map_id == id_ && pins->epoch == epoch_.load(std::memory_order_relaxed)) {
-    const TilePins::Pin& pin = pins->pins[pin_slot(method, x, y)];
+    const TilePins::Pin& pin = pins->pins[pin_slot(*pins, method, x, y)];
     if (pin.key == pin_key(method, x, y)) {
       ++pins->unreported_hits;
       *tile = pin.tile;
@@ -160,8 +169,12 @@ bool ShadowMap::pin_slow(store::Method method, uint32_t x, uint32_t y, const Dec
   pins.unreported_hits = 0;
   const uint64_t epoch = epoch_.load(std::memory_order_acquire);
   if (pins.map_id != id_ || pins.epoch != epoch) {
-    if (pins.map_id != id_) hits = 0;  // another map's hits
-    pins.drop_all();
+    if (pins.map_id != id_) {
+      hits = 0;  // another map's hits
+      pins.size_for(layout_.tiles_per_side());
+    } else {
+      pins.drop_all();
+    }
     pins.map_id = id_;
     pins.epoch = epoch;
   }
@@ -170,9 +183,9 @@ bool ShadowMap::pin_slow(store::Method method, uint32_t x, uint32_t y, const Dec
     *error = shared.error();
     return false;
   }
-  const size_t slot = pin_slot(method, x, y);
+  const size_t slot = pin_slot(pins, method, x, y);
   TilePins::Pin& pin = pins.pins[slot];
-  if (pin.key == 0) pins.used[pins.used_count++] = uint16_t(slot);
+  if (pin.key == 0) pins.used.push_back(uint32_t(slot));
   pin.key = pin_key(method, x, y);
   pin.tile = shared->get();
   pin.hold = std::move(*shared);

@@ -7,8 +7,8 @@
 // Points outside the map are lit and flagged; absent tiles of a complete build are empty (lit).
 // Thread safety: all methods may be called concurrently. Lookups scale with threads: a lookup's
 // hot path writes nothing shared (no reference count, atomic or lock). Eviction safety is by
-// per-thread pins: each thread keeps shared_ptr pins to the tiles it used last (1,024 slots,
-// direct-mapped: a 32 x 32 block of tiles per method), reads them by raw pointer, and re-pins through the locked shared cache on a miss.
+// per-thread pins: each thread keeps shared_ptr pins to the tiles it used last (direct-mapped, a
+// slot per tile of the map up to 128 x 128 tiles of a method), reads them by raw pointer, and re-pins through the locked shared cache on a miss.
 // The cache evicts only its own reference; an evicted tile lives on until every thread that pinned
 // it notices the cache's eviction epoch changed (at its next lookup) and drops its pins, or exits.
 // So the cache may exceed its budget by the tiles pinned by threads between an eviction and their

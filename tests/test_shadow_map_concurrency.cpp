@@ -101,30 +101,35 @@ TEST_F(ShadowMapConcurrencyTest, EvictionUnderConcurrentLookupsStaysExact) {
   EXPECT_LE(stats.bytes, options.cache_bytes);
 }
 
-// A thread's pins hold a 32 x 32 block of tiles: once every tile of a 16 x 16-tile map has been
-// read, reading each again (in an order that jumps across the map, as random queries do) goes
-// through no lock. (With 8 x 8 slots, most of these went through the locked cache.)
-TEST(ShadowMapPins, A16By16TileMapStaysPinnedAfterOnePass) {
-  testing::TempDir dir;
-  const BuildConfig config = testing::shared_scene_config({"fzk_haus/fzk_haus.obj", UpAxis::y, false},
-                                                          dir.path() / "store", 512, 32, {store::Method::dagmh});
-  ASSERT_TRUE(run_build(config).ok());
-  auto map = ShadowMap::open(dir.path() / "store");
-  ASSERT_TRUE(map.ok());
-  const ShadowMap& m = **map;
-  const uint32_t tiles = m.layout().tiles_per_side(), size = m.layout().tile_size();
-  ASSERT_EQ(tiles, 16u);
-  std::vector<std::pair<uint32_t, uint32_t>> order;
-  for (uint32_t y = 0; y < tiles; ++y)
-    for (uint32_t x = 0; x < tiles; ++x) order.push_back({x, y});
-  std::shuffle(order.begin(), order.end(), std::mt19937(3));
-  for (const auto& [x, y] : order) ASSERT_TRUE(m.texel_value(store::Method::dagmh, x * size + 1, y * size + 2).ok());
-  const uint64_t after_first = m.cache_stats().locked_lookups;
-  EXPECT_GE(after_first, uint64_t(tiles) * tiles);  // each tile pinned once through the cache
-  std::shuffle(order.begin(), order.end(), std::mt19937(4));
-  for (const auto& [x, y] : order) ASSERT_TRUE(m.texel_value(store::Method::dagmh, x * size + 3, y * size).ok());
-  EXPECT_EQ(m.cache_stats().locked_lookups, after_first);
-  EXPECT_EQ(m.cache_stats().evictions, 0u);
+// A thread's pins hold a slot per tile of the map (up to 128 tiles a side): once every tile of a
+// 16 x 16-tile or a 64 x 64-tile map has been read, reading each again (in an order that jumps
+// across the map, as random queries do) goes through no lock. (With a fixed 8 x 8 table, most of
+// these went through the locked cache.)
+TEST(ShadowMapPins, EveryTileOfAMapStaysPinnedAfterOnePass) {
+  for (const uint32_t tile_size : {32u, 8u}) {
+    testing::TempDir dir;
+    const BuildConfig config = testing::shared_scene_config({"fzk_haus/fzk_haus.obj", UpAxis::y, false},
+                                                            dir.path() / "store", 512, tile_size, {store::Method::dagmh});
+    ASSERT_TRUE(run_build(config).ok());
+    auto map = ShadowMap::open(dir.path() / "store");
+    ASSERT_TRUE(map.ok());
+    const ShadowMap& m = **map;
+    const uint32_t tiles = m.layout().tiles_per_side();
+    ASSERT_EQ(tiles, 512 / tile_size);
+    std::vector<std::pair<uint32_t, uint32_t>> order;
+    for (uint32_t y = 0; y < tiles; ++y)
+      for (uint32_t x = 0; x < tiles; ++x) order.push_back({x, y});
+    std::shuffle(order.begin(), order.end(), std::mt19937(3));
+    for (const auto& [x, y] : order)
+      ASSERT_TRUE(m.texel_value(store::Method::dagmh, x * tile_size + 1, y * tile_size + 2).ok());
+    const uint64_t after_first = m.cache_stats().locked_lookups;
+    EXPECT_GE(after_first, uint64_t(tiles) * tiles);  // each tile pinned once through the cache
+    std::shuffle(order.begin(), order.end(), std::mt19937(4));
+    for (const auto& [x, y] : order)
+      ASSERT_TRUE(m.texel_value(store::Method::dagmh, x * tile_size + 3, y * tile_size).ok());
+    EXPECT_EQ(m.cache_stats().locked_lookups, after_first) << tiles << " x " << tiles << " tiles";
+    EXPECT_EQ(m.cache_stats().evictions, 0u);
+  }
 }
 
 }  // namespace
