@@ -108,6 +108,10 @@ std::string Metrics::render(const std::optional<CacheStats>& cache) const {
     single("shadowtiles_tile_cache_hits_total", "counter", "Decoded tile cache hits.", cache->hits);
     single("shadowtiles_tile_cache_misses_total", "counter", "Decoded tile cache misses (tile read and decoded).",
            cache->misses);
+    single("shadowtiles_tile_cache_locked_lookups_total", "counter",
+           "Tile lookups made through the cache's lock (a query thread's pin misses, a batch's tiles); "
+           "about one per query means the per-thread pins thrash.",
+           cache->locked_lookups);
     single("shadowtiles_tile_cache_fetched_bytes_total", "counter",
            "Stored blob bytes read into the tile cache (compressed, as stored).", cache->fetched_bytes);
     single("shadowtiles_tile_cache_bytes", "gauge", "Bytes held by decoded tiles in the cache.", cache->bytes);

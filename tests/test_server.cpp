@@ -60,6 +60,8 @@ TEST_F(ServerTest, HealthAndMetrics) {
   EXPECT_EQ(metric(after->body, "shadowtiles_points_answered_total"),
             metric(before->body, "shadowtiles_points_answered_total") + 3);
   EXPECT_GT(metric(after->body, "shadowtiles_tile_cache_misses_total"), 0u);
+  EXPECT_GT(metric(after->body, "shadowtiles_tile_cache_locked_lookups_total"),
+            metric(before->body, "shadowtiles_tile_cache_locked_lookups_total"));
   EXPECT_GT(metric(after->body, "shadowtiles_tile_cache_fetched_bytes_total"),
             metric(before->body, "shadowtiles_tile_cache_fetched_bytes_total"));
   EXPECT_GT(metric(after->body, "shadowtiles_tile_cache_bytes"), 0u);
