@@ -50,13 +50,13 @@ class EntryCover {
 
  private:
   class Fast;
+  // Asks the cache for a triangle's vertices, plane and neighbours (a search reads all three).
+  void prefetch_triangle(bool open, uint32_t prim) const;
+
   const TileGeometry& geometry_;
   double tile_u0_, tile_v0_;
   float slack_, tolerance_;
   std::unique_ptr<Fast> fast_;
-  // Asks the cache for a triangle's vertices, plane and neighbours (a search reads all three).
-  void prefetch_triangle(bool open, uint32_t prim) const;
-
   std::vector<double> run_deepest_;  // bound_row's per-run scratch
   struct Search {
     uint32_t u, key;  // a texel of the row that needs entry_lower_by_search, and its first hit

@@ -8,7 +8,8 @@
 // Thread safety: all methods may be called concurrently. Lookups scale with threads: a lookup's
 // hot path writes nothing shared (no reference count, atomic or lock). Eviction safety is by
 // per-thread pins: each thread keeps shared_ptr pins to the tiles it used last (direct-mapped, a
-// slot per tile of the map up to 128 x 128 tiles of a method), reads them by raw pointer, and re-pins through the locked shared cache on a miss.
+// slot per tile of the map up to 128 x 128 tiles of a method), reads them by raw pointer, and
+// re-pins through the locked shared cache on a miss.
 // The cache evicts only its own reference; an evicted tile lives on until every thread that pinned
 // it notices the cache's eviction epoch changed (at its next lookup) and drops its pins, or exits.
 // So the cache may exceed its budget by the tiles pinned by threads between an eviction and their
@@ -52,8 +53,7 @@ struct CacheStats {
   uint64_t hits = 0;
   uint64_t misses = 0;         // fetches (blob read + decode)
   uint64_t shared_misses = 0;  // misses that waited for another thread's fetch of the same tile
-  uint64_t locked_lookups = 0;  // lookups through the locked cache: a thread's pin misses, a batch's
-                                // tiles, tile()
+  uint64_t locked_lookups = 0;  // lookups through the locked cache: pin misses, a batch's tiles, tile()
   uint64_t bytes = 0;
   uint64_t peak_bytes = 0;     // largest `bytes` so far
   uint64_t evictions = 0;
