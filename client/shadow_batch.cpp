@@ -11,6 +11,10 @@
 //      kernels' common ancestors shared along the curve), kernels crossing a
 //      tile or the map's edge and coarse levels to the per-point path. Point answers go to a byte
 //      per point (BatchAnswers::lit_bytes), which the last pass turns into `lit`'s floats.
+// Raw point batches take a path of their own: a raw lookup is one read of a map far larger than the
+// caches, which the order above does not make cheaper, so workers claim chunks of points and answer
+// each on its own (transform, a count per tile, the chunk's points grouped by tile in cache, reads),
+// with no pass over the whole batch.
 // Every answer is computed by the same expressions as query() / query_pcf(), so they are equal.
 #include <algorithm>
 #include <atomic>
@@ -18,6 +22,7 @@
 #include <mutex>
 #include <thread>
 
+#include "client/batch_point_blocks.hpp"
 #include "client/batch_texel_keys.hpp"
 #include "client/shadow_map.hpp"
 #include "common/parallel_for.hpp"
@@ -34,6 +39,10 @@ constexpr size_t kQueryBlock = 256;  // point queries handed to a decoder at onc
 // Buckets a worker claims at once: it knows its next bucket, and fetches it ahead (the scatter
 // left the buckets in memory, not in this core's cache).
 constexpr size_t kBucketGroup = 4;
+// The raw path: points a chunk (its items and their copy by tile, 512 KiB, stay in a core's cache),
+// and the largest map it takes (a count per tile per chunk).
+constexpr size_t kChunkedPoints = 16384;
+constexpr size_t kMaxChunkedTilesPerSide = 64;
 
 // Orders items[0, n) by the key's low `bits` bits (the bits above are equal), `scratch` of n items:
 // counting passes on 8-bit digits sort just the top digits, enough that about kSmallGroup items
@@ -87,13 +96,21 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
   const std::optional<unsigned> level = options.level;
   // Coarse levels answered by the top tree, as query() does.
   const bool coarse = level && *level < layout_.tile_level() && top_trees_.count(method);
+  // Raw: a lookup is one read of a map far larger than the caches, which the sort's order does not
+  // make cheaper, so each chunk of points is answered on its own, grouped by tile in cache, with no
+  // pass over the whole batch (docs/client.md, session 42). Maps of up to 64 x 64 tiles (a count
+  // per tile per chunk).
+  const size_t tiles_per_side = layout_.tiles_per_side();
+  const bool raw_by_chunks =
+      method == store::Method::raw && kernel == 1 && !coarse && tiles_per_side <= kMaxChunkedTilesPerSide;
 
   const size_t n = points.size();
   if (n == 0) return {};
-  // Points: bytes first (lit unless the walk says otherwise), floats at the end. PCF: floats.
+  // Points: bytes first (lit unless the walk says otherwise), floats at the end; the raw path
+  // writes the floats. PCF: floats.
   if (kernel == 1) {
     out.lit.resize(n);
-    out.lit_bytes.assign(n, 1);
+    if (!raw_by_chunks) out.lit_bytes.assign(n, 1);
   } else {
     out.lit.assign(n, 1.0f);
   }
@@ -152,62 +169,109 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
     });
   };
 
-  // A: transform, key, histogram.
-  claim_chunks([&](size_t c0, size_t c1) {
-    // Locals, not captures by reference: the histogram's stores could alias captured values, which
-    // would be reloaded per point.
-    const LightFrame frame = frame_;
-    const BatchTexelKeys texel_keys = keys;
-    const auto bucket = bucket_of;
-    const double res = resolution, bias = bias_depth;
-    // In blocks of points: the transform (a loop without a branch, which the compiler vectorises),
-    // then keys, then items and histogram. One loop doing all of it per point cost a quarter more
-    // (fzk_haus 16384², 1M points: 8.7 -> 6.9 ms for this pass).
-    constexpr size_t kBlock = 64;
-    double block_u[kBlock], block_v[kBlock], block_depth[kBlock];
-    uint64_t block_key[kBlock];
-    float block_threshold[kBlock];
-    for (size_t c = c0; c < c1 && !failed; ++c) {
-      uint32_t* hist = &histogram[c * (buckets + 1)];
-      for (size_t first = c * points_per_chunk, end = std::min(n, first + points_per_chunk); first < end;
-           first += kBlock) {
-        const size_t count = std::min(kBlock, end - first);
-        const Vec3* const block_points = points.data() + first;
-        for (size_t j = 0; j < count; ++j) {
-          const LightSpacePoint light = frame.to_light(block_points[j]);
-          block_u[j] = light.u;
-          block_v[j] = light.v;
-          block_depth[j] = light.depth;
-        }
-        // Keys and thresholds; off the map: kOffMap, threshold 0.
-        size_t off_map = 0;
-        auto keys_of_block = [&](auto make_key) {
-          for (size_t j = 0; j < count; ++j) {
-            const double u = block_u[j], v = block_v[j];
-            const bool on_map = u >= 0 && u < res && v >= 0 && v < res;
-            off_map += !on_map;
-            const uint64_t key = make_key(on_map ? uint32_t(u) : 0u, on_map ? uint32_t(v) : 0u);
-            block_key[j] = on_map ? key : kOffMap;
-            block_threshold[j] = on_map ? float(std::min(block_depth[j], 1.0) - bias) : 0.0f;  // biased_depth(), bias hoisted
+  const BatchPointBlocks point_blocks(frame_, keys, resolution, bias_depth);
+  auto non_finite = [] { return make_error(ErrorCode::invalid_input, "point coordinates must be finite"); };
+
+  // The raw path (above): per chunk, transform, group by tile, read.
+  if (raw_by_chunks) {
+    const size_t tile_count = tiles_per_side * tiles_per_side;
+    const uint32_t tile_mask = layout_.tile_size() - 1;
+    const size_t chunk_points = std::min(n, kChunkedPoints);
+    const size_t chunk_count = (n + chunk_points - 1) / chunk_points;
+    std::mutex outside_mutex;
+    // Each worker's two item buffers, from the ones `out` keeps between batches (see BatchAnswers).
+    const size_t worker_count = std::min<size_t>(workers, chunk_count);
+    if (out.sort_items.size() < 2 * worker_count * chunk_points)
+      out.sort_items.resize_for_overwrite(2 * worker_count * chunk_points);
+    std::atomic<size_t> next_worker{0};
+    next_chunk = 0;
+    parallel_for(worker_count, [&](size_t, size_t) {
+      std::vector<std::shared_ptr<const DecodedTile>> tiles(tile_count);  // this worker's, by tile index
+      std::vector<uint8_t> fetched(tile_count, 0);
+      BatchItem* const on_map = out.sort_items.data() + 2 * chunk_points * next_worker.fetch_add(1);
+      BatchItem* const by_tile = on_map + chunk_points;
+      std::vector<uint32_t> tile_start(tile_count + 1), next(tile_count);
+      std::vector<uint32_t> outside;
+      TexelQuery queries[kQueryBlock];
+      uint32_t query_index[kQueryBlock];
+      uint8_t lit[kQueryBlock];
+      float* const answers = out.lit.data();
+      auto tile_index = [&](uint64_t key) {
+        return size_t(keys.v(key) >> tile_shift_) * tiles_per_side + (keys.u(key) >> tile_shift_);
+      };
+      for (size_t c; !failed && (c = next_chunk.fetch_add(1, std::memory_order_relaxed)) < chunk_count;) {
+        const size_t first = c * chunk_points, end = std::min(n, first + chunk_points);
+        size_t count = 0;
+        std::fill(tile_start.begin(), tile_start.end(), 0u);
+        const bool finite = point_blocks.for_each(points, first, end, [&](size_t block_first, size_t block_count,
+                                                                           const uint64_t* block_keys,
+                                                                           const float* thresholds) {
+          for (size_t j = 0; j < block_count; ++j) {
+            const uint32_t index = uint32_t(block_first + j);
+            if (block_keys[j] == kOffMap) {
+              answers[index] = 1.0f;
+              outside.push_back(index);
+              continue;
+            }
+            on_map[count++] = {block_keys[j], index, thresholds[j]};
+            ++tile_start[tile_index(block_keys[j]) + 1];
           }
-        };
-        // One loop per key layout, so the layout is not tested per point (this pass 7.6 -> 6.9 ms).
-        if (texel_keys.packed())
-          keys_of_block([](uint32_t u, uint32_t v) { return BatchTexelKeys::make_packed(u, v); });
-        else
-          keys_of_block([](uint32_t u, uint32_t v) { return BatchTexelKeys::make_wide(u, v); });
-        // A coordinate that is not finite makes u not finite (every axis term adds it, and inf * 0
-        // is NaN), so such points are all off the map: checked only there.
-        for (size_t j = 0; off_map > 0 && j < count; ++j) {
-          const Vec3& p = block_points[j];
-          if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
-            return fail(make_error(ErrorCode::invalid_input, "point coordinates must be finite"));
-        }
-        for (size_t j = 0; j < count; ++j) {
-          items[first + j] = {block_key[j], uint32_t(first + j), block_threshold[j]};
-          ++hist[bucket(block_key[j])];
+        });
+        if (!finite) return fail(non_finite());
+        for (size_t t = 0; t < tile_count; ++t) next[t] = tile_start[t], tile_start[t + 1] += tile_start[t];
+        for (size_t i = 0; i < count; ++i) by_tile[next[tile_index(on_map[i].key)]++] = on_map[i];
+        for (size_t t = 0; t < tile_count && !failed; ++t) {
+          const uint32_t s = tile_start[t], e = tile_start[t + 1];
+          if (s == e) continue;
+          if (!fetched[t]) {
+            auto found = shared_tile(store::TileKey{method, layout_.tile_level(), uint32_t(t % tiles_per_side),
+                                                    uint32_t(t / tiles_per_side)},
+                                     0);
+            if (!found) return fail(found.error());
+            tiles[t] = std::move(*found);
+            fetched[t] = 1;
+          }
+          const DecodedTile* const tile = tiles[t].get();
+          for (uint32_t i = s; i < e;) {
+            const size_t block = std::min<size_t>(kQueryBlock, e - i);
+            for (size_t j = 0; j < block; ++j) {
+              const BatchItem& item = by_tile[i + j];
+              queries[j] = {keys.u(item.key) & tile_mask, keys.v(item.key) & tile_mask, item.threshold};
+              query_index[j] = item.index;
+            }
+            if (tile)
+              tile->lit_sorted({queries, block}, max_level, lit);
+            else
+              std::fill_n(lit, block, uint8_t(1));  // empty tile: lit
+            for (size_t j = 0; j < block; ++j) answers[query_index[j]] = float(lit[j] != 0);
+            i += uint32_t(block);
+          }
         }
       }
+      std::lock_guard lock(outside_mutex);
+      out.outside.insert(out.outside.end(), outside.begin(), outside.end());
+    });
+    if (first_error) return batch_error();
+    std::sort(out.outside.begin(), out.outside.end());
+    return {};
+  }
+
+  // A: transform, key, histogram.
+  claim_chunks([&](size_t c0, size_t c1) {
+    for (size_t c = c0; c < c1 && !failed; ++c) {
+      uint32_t* const hist = &histogram[c * (buckets + 1)];
+      // A local copy: the histogram's stores could alias a captured value, reloaded per point.
+      const auto bucket = bucket_of;
+      const size_t first = c * points_per_chunk, end = std::min(n, first + points_per_chunk);
+      const bool finite = point_blocks.for_each(points, first, end, [&](size_t block_first, size_t count,
+                                                                         const uint64_t* block_keys,
+                                                                         const float* thresholds) {
+        for (size_t j = 0; j < count; ++j) {
+          items[block_first + j] = {block_keys[j], uint32_t(block_first + j), thresholds[j]};
+          ++hist[bucket(block_keys[j])];
+        }
+      });
+      if (!finite) return fail(non_finite());
     }
   });
   if (first_error) return batch_error();

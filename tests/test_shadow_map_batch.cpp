@@ -211,62 +211,68 @@ TEST_F(ShadowMapBatchTest, BadBatchesAreErrors) {
 // A tile whose stored blob fails its checksum, met by the walks after other tiles were answered and
 // the points off the map were listed: the batch is corrupt_data, with neither answers nor the
 // outside list left behind, and no answer of the damaged method is served from that tile later.
+// MH goes through the sorted pipeline, raw through the chunked one (client/shadow_batch.cpp).
 TEST_F(ShadowMapBatchTest, ACorruptTileMidBatchIsAnErrorWithNoAnswers) {
-  testing::TempDir dir;
-  const auto damaged = dir.path() / "damaged.store";
-  std::filesystem::copy(store(), damaged, std::filesystem::copy_options::recursive);
-  TileCoord target{};
-  {
-    auto clean = ShadowMap::open(store());
-    ASSERT_TRUE(clean.ok());
-    const ShadowMap& m = **clean;
-    // Of the stored MH tiles holding points, the last in Morton order, the order the walks take:
-    // the points in the tiles before it are answered first.
-    std::optional<TileCoord> tile;
-    size_t stored_tiles = 0;
-    for (const Vec3& p : *points_) {
-      auto t = m.tile_of(p);
-      if (!t || (tile && morton_encode(t->x, t->y) <= morton_encode(tile->x, tile->y))) continue;
-      auto decoded = m.tile(store::Method::mh, *t);
-      ASSERT_TRUE(decoded.ok());
-      if (*decoded) tile = t, ++stored_tiles;
+  for (store::Method damaged_method : {store::Method::mh, store::Method::raw}) {
+    SCOPED_TRACE(store::method_name(damaged_method));
+    const store::Method other = damaged_method == store::Method::mh ? store::Method::raw : store::Method::mh;
+    testing::TempDir dir;
+    const auto damaged = dir.path() / "damaged.store";
+    std::filesystem::copy(store(), damaged, std::filesystem::copy_options::recursive);
+    TileCoord target{};
+    {
+      auto clean = ShadowMap::open(store());
+      ASSERT_TRUE(clean.ok());
+      const ShadowMap& m = **clean;
+      // Of the stored tiles holding points, the last in Morton order, the order the MH walks take:
+      // the points in the tiles before it are answered first.
+      std::optional<TileCoord> tile;
+      size_t stored_tiles = 0;
+      for (const Vec3& p : *points_) {
+        auto t = m.tile_of(p);
+        if (!t || (tile && morton_encode(t->x, t->y) <= morton_encode(tile->x, tile->y))) continue;
+        auto decoded = m.tile(damaged_method, *t);
+        ASSERT_TRUE(decoded.ok());
+        if (*decoded) tile = t, ++stored_tiles;
+      }
+      ASSERT_TRUE(tile.has_value());
+      ASSERT_GT(stored_tiles, 2u) << "stored tiles met in rising Morton order: at least two come before the target";
+      target = *tile;
+      testing::flip_a_bit_in_stored_tile(damaged, {damaged_method, m.layout().tile_level(), target.x, target.y});
     }
-    ASSERT_TRUE(tile.has_value());
-    ASSERT_GT(stored_tiles, 2u) << "stored tiles met in rising Morton order: at least two come before the target";
-    target = *tile;
-    testing::flip_a_bit_in_stored_tile(damaged, {store::Method::mh, m.layout().tile_level(), target.x, target.y});
-  }
-  auto map = ShadowMap::open(damaged);
-  ASSERT_TRUE(map.ok());
-  const ShadowMap& m = **map;
-  for (unsigned kernel : {1u, 3u}) {
+    auto map = ShadowMap::open(damaged);
+    ASSERT_TRUE(map.ok());
+    const ShadowMap& m = **map;
+    for (unsigned kernel : {1u, 3u})
+      for (unsigned threads : {1u, 2u}) {  // one worker: the tiles before the damaged one are answered first
+        ShadowMap::BatchAnswers answers;
+        ShadowMap::BatchOptions options;
+        options.kernel = kernel;
+        options.threads = threads;
+        // The same answers object held a whole batch of another method a moment ago.
+        ASSERT_TRUE(m.query_batch(*points_, other, options, answers).ok());
+        ASSERT_FALSE(answers.outside.empty()) << "the points include some off the map";
+        auto batch = m.query_batch(*points_, damaged_method, options, answers);
+        ASSERT_FALSE(batch.ok()) << "kernel " << kernel;
+        EXPECT_EQ(batch.error().code, ErrorCode::corrupt_data) << batch.error().message;
+        EXPECT_TRUE(answers.lit.empty()) << "kernel " << kernel << ", threads " << threads;
+        EXPECT_TRUE(answers.outside.empty()) << "kernel " << kernel << ", threads " << threads;
+      }
+    // A later single query in the damaged tile is the same error, not an answer; another method's
+    // tiles at the same place still answer.
+    auto in_target = std::find_if(points_->begin(), points_->end(), [&](const Vec3& p) {
+      auto t = m.tile_of(p);
+      return t && t->x == target.x && t->y == target.y;
+    });
+    ASSERT_NE(in_target, points_->end());
+    auto single = m.query(*in_target, damaged_method);
+    ASSERT_FALSE(single.ok());
+    EXPECT_EQ(single.error().code, ErrorCode::corrupt_data);
+    EXPECT_TRUE(m.query(*in_target, store::Method::dagmh).ok());
     ShadowMap::BatchAnswers answers;
-    ShadowMap::BatchOptions options;
-    options.kernel = kernel;
-    options.threads = 1;  // one worker: the tiles before the damaged one are answered first
-    // The same answers object held a whole batch of another method a moment ago.
-    ASSERT_TRUE(m.query_batch(*points_, store::Method::raw, options, answers).ok());
-    ASSERT_FALSE(answers.outside.empty()) << "the points include some off the map";
-    auto batch = m.query_batch(*points_, store::Method::mh, options, answers);
-    ASSERT_FALSE(batch.ok()) << "kernel " << kernel;
-    EXPECT_EQ(batch.error().code, ErrorCode::corrupt_data) << batch.error().message;
-    EXPECT_TRUE(answers.lit.empty()) << "kernel " << kernel;
-    EXPECT_TRUE(answers.outside.empty()) << "kernel " << kernel;
+    EXPECT_TRUE(m.query_batch(*points_, store::Method::dagmh, {}, answers).ok());
+    EXPECT_EQ(answers.lit.size(), points_->size());
   }
-  // A later single query in the damaged tile is the same error, not an answer; another method's
-  // tiles at the same place still answer.
-  auto in_target = std::find_if(points_->begin(), points_->end(), [&](const Vec3& p) {
-    auto t = m.tile_of(p);
-    return t && t->x == target.x && t->y == target.y;
-  });
-  ASSERT_NE(in_target, points_->end());
-  auto single = m.query(*in_target, store::Method::mh);
-  ASSERT_FALSE(single.ok());
-  EXPECT_EQ(single.error().code, ErrorCode::corrupt_data);
-  EXPECT_TRUE(m.query(*in_target, store::Method::dagmh).ok());
-  ShadowMap::BatchAnswers answers;
-  EXPECT_TRUE(m.query_batch(*points_, store::Method::dagmh, {}, answers).ok());
-  EXPECT_EQ(answers.lit.size(), points_->size());
 }
 
 }  // namespace
