@@ -113,8 +113,9 @@ class ShadowMap {
   // points off the map (lit), ascending. Points are sorted by tile and along the Morton curve inside
   // it, each tile is looked up once per run of its points, runs walk down a shared path (each point
   // resumes from the deepest node it shares with the previous one), and the work is split across
-  // `threads`. Errors: those of query() / query_pcf() (the first one fails the whole batch, and
-  // leaves out.lit and out.outside empty).
+  // `threads`; raw point batches skip the sort (one read a point: each chunk of points is grouped
+  // by tile in cache, client/shadow_batch.cpp). Errors: those of query() / query_pcf() (the first
+  // one fails the whole batch, and leaves out.lit and out.outside empty).
   struct BatchOptions {
     unsigned kernel = 1;  // 1: point query; odd k: PCF k x k
     std::optional<double> bias;
@@ -134,9 +135,9 @@ class ShadowMap {
     std::vector<float> lit;
     std::vector<uint32_t> outside;
     // The sort's buffers (32 bytes per point of the largest batch so far, plus its histograms, and
-    // lit_bytes' 1 byte per point), kept for the next batch answered into these answers: reusing
-    // one BatchAnswers for repeated batches skips re-allocating them (zero-filled fresh pages:
-    // ~8,000 page faults per 1M-point batch).
+    // lit_bytes' 1 byte per point; raw point batches: 512 KiB per worker), kept for the next batch
+    // answered into these answers: reusing one BatchAnswers for repeated batches skips
+    // re-allocating them (zero-filled fresh pages: ~8,000 page faults per 1M-point batch).
     // Drop the answers (or assign `sort_items = {}` and clear the histogram) to free that memory.
     // The items in 2 MiB pages where the kernel allows: the sort's scatter writes to 4,096 buckets
     // at once, a page each with 4 KiB pages, which the TLB cannot hold (fzk_haus 16384², 1M points,
