@@ -21,6 +21,7 @@
 #include <cmath>
 #include <mutex>
 #include <thread>
+#include <type_traits>
 
 #include "client/batch_point_blocks.hpp"
 #include "client/batch_texel_keys.hpp"
@@ -171,11 +172,30 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
 
   const BatchPointBlocks point_blocks(frame_, keys, resolution, bias_depth);
   auto non_finite = [] { return make_error(ErrorCode::invalid_input, "point coordinates must be finite"); };
+  const uint32_t tile_mask = layout_.tile_size() - 1;
+  // Point answers for items[0, count), points of one stored tile, in blocks for the decoder's
+  // shared-path walk: answers[item.index] = 1 lit, 0 shadowed (bytes in the sorted path, floats in
+  // raw's). `queries`, `query_index` and `lit` hold kQueryBlock each.
+  auto answer_points = [&](const DecodedTile& tile, const BatchItem* items, size_t count, auto* answers,
+                           TexelQuery* queries, uint32_t* query_index, uint8_t* lit) {
+    using Answer = std::remove_pointer_t<decltype(answers)>;
+    for (size_t i = 0; i < count;) {
+      const size_t block = std::min(kQueryBlock, count - i);
+      for (size_t j = 0; j < block; ++j) {
+        const BatchItem& item = items[i + j];
+        queries[j] = {keys.u(item.key) & tile_mask, keys.v(item.key) & tile_mask, item.threshold};
+        query_index[j] = item.index;
+      }
+      tile.lit_sorted({queries, block}, max_level, lit);
+      // Without a branch: which points are lit is as good as random here.
+      for (size_t j = 0; j < block; ++j) answers[query_index[j]] = Answer(lit[j] != 0);
+      i += block;
+    }
+  };
 
   // The raw path (above): per chunk, transform, group by tile, read.
   if (raw_by_chunks) {
     const size_t tile_count = tiles_per_side * tiles_per_side;
-    const uint32_t tile_mask = layout_.tile_size() - 1;
     const size_t chunk_points = std::min(n, kChunkedPoints);
     const size_t chunk_count = (n + chunk_points - 1) / chunk_points;
     std::mutex outside_mutex;
@@ -231,21 +251,10 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
             tiles[t] = std::move(*found);
             fetched[t] = 1;
           }
-          const DecodedTile* const tile = tiles[t].get();
-          for (uint32_t i = s; i < e;) {
-            const size_t block = std::min<size_t>(kQueryBlock, e - i);
-            for (size_t j = 0; j < block; ++j) {
-              const BatchItem& item = by_tile[i + j];
-              queries[j] = {keys.u(item.key) & tile_mask, keys.v(item.key) & tile_mask, item.threshold};
-              query_index[j] = item.index;
-            }
-            if (tile)
-              tile->lit_sorted({queries, block}, max_level, lit);
-            else
-              std::fill_n(lit, block, uint8_t(1));  // empty tile: lit
-            for (size_t j = 0; j < block; ++j) answers[query_index[j]] = float(lit[j] != 0);
-            i += uint32_t(block);
-          }
+          if (tiles[t])
+            answer_points(*tiles[t], by_tile + s, e - s, answers, queries, query_index, lit);
+          else
+            for (uint32_t i = s; i < e; ++i) answers[by_tile[i].index] = 1.0f;  // empty tile: lit
         }
       }
       std::lock_guard lock(outside_mutex);
@@ -307,7 +316,6 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
 
   // C: buckets claimed by workers; sorted in cache, then walked per tile run.
   const unsigned tile_key_shift = 2 * tile_shift_;
-  const uint32_t tile_mask = layout_.tile_size() - 1;
   const double k2 = double(kernel) * kernel;
   std::atomic<size_t> next_bucket{0};
   parallel_for(workers, [&](size_t, size_t) {
@@ -354,19 +362,7 @@ Status ShadowMap::query_batch(std::span<const Vec3> points, store::Method method
               out.lit_bytes[item.index] = value ? uint8_t(item.threshold <= *value) : uint8_t(1);
             }
           } else if (tile) {
-            for (uint32_t i = run; i < run_end;) {
-              const size_t block = std::min<size_t>(kQueryBlock, run_end - i);
-              for (size_t j = 0; j < block; ++j) {
-                const BatchItem& item = bucket(i + j);
-                queries[j] = {keys.u(item.key) & tile_mask, keys.v(item.key) & tile_mask, item.threshold};
-                query_index[j] = item.index;
-              }
-              tile->lit_sorted({queries, block}, max_level, lit);
-              // Without a branch: which points are lit is as good as random here.
-              uint8_t* const answers = out.lit_bytes.data();
-              for (size_t j = 0; j < block; ++j) answers[query_index[j]] = uint8_t(lit[j] != 0);
-              i += uint32_t(block);
-            }
+            answer_points(*tile, &bucket(run), run_end - run, out.lit_bytes.data(), queries, query_index, lit);
           }  // empty tile: lit (already 1)
         } else {
           const int64_t half = kernel / 2, size = layout_.tile_size();
