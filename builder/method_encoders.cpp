@@ -27,14 +27,21 @@ Result<EncodedBytes> encode_raw(TileEncodeInput& input) {
 Result<EncodedBytes> encode_mh_method(TileEncodeInput& input) {
   auto mh = input.mh();
   if (!mh) return mh.error();
-  auto bytes = encode_mh(**mh);
+  auto bytes = input.mh_payload();
   if (!bytes) return bytes.error();
-  return EncodedBytes{std::move(*bytes), sbe16a_reference_bytes(**mh)};
+  return EncodedBytes{**bytes, sbe16a_reference_bytes(**mh)};
 }
 
 Result<EncodedBytes> encode_mmh_method(TileEncodeInput& input) {
   auto mh = input.mh();
   if (!mh) return mh.error();
+  // Where no block can merge (most full-depth tiles of open meshes under `anywhere`), MMH is MH byte
+  // for byte: the merge, its renumbering and a second encode would only say so.
+  if (mmh_merge_finds_nothing(**mh)) {
+    auto bytes = input.mh_payload();
+    if (!bytes) return bytes.error();
+    return EncodedBytes{**bytes, sbe16a_reference_bytes(**mh)};
+  }
   auto merged = merge_mmh(**mh);
   if (!merged) return merged.error();
   auto bytes = encode_mh(*merged);
@@ -129,6 +136,17 @@ Result<const MhHierarchy*> TileEncodeInput::mh() {
     mh_ = std::move(*built);
   }
   return &*mh_;
+}
+
+Result<const std::vector<uint8_t>*> TileEncodeInput::mh_payload() {
+  if (!mh_payload_) {
+    auto tree = mh();
+    if (!tree) return tree.error();
+    auto bytes = encode_mh(**tree);
+    if (!bytes) return bytes.error();
+    mh_payload_ = std::move(*bytes);
+  }
+  return &*mh_payload_;
 }
 
 const MethodEncoder* find_encoder(store::Method method) {

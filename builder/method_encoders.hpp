@@ -38,12 +38,16 @@ class TileEncodeInput {
   // Errors: those of build_mh.
   Result<const MhHierarchy*> mh();
   bool mh_built() const { return mh_.has_value(); }
+  // encode_mh(*mh()), encoded once: MH's payload, and MMH's too where its merge provably finds
+  // nothing (mmh_merge_finds_nothing). Errors: those of mh() and encode_mh.
+  Result<const std::vector<uint8_t>*> mh_payload();
 
  private:
   const TileIntervals& intervals_;
   const TileEncodeOptions& options_;
   std::optional<TileIntervals> entry_applied_;
   std::optional<MhHierarchy> mh_;
+  std::optional<std::vector<uint8_t>> mh_payload_;
 };
 
 struct EncodedBytes {

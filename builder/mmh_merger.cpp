@@ -1,6 +1,7 @@
 #include "builder/mmh_merger.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cstring>
 #include <limits>
@@ -44,23 +45,23 @@ bool point_key(const DepthInterval& x, uint64_t* key) {
   return false;
 }
 
-struct Merger {
-  MhHierarchy& h;
+// Per block, from its children's: what the merge buckets and filters by. Computed in reverse
+// breadth-first order (children before parents), a loop where a recursive walk went depth-first
+// through memory.
+struct BlockSummaries {
   std::vector<uint8_t> height;
-  std::vector<uint64_t> hash;
+  std::vector<uint64_t> hash;       // topology: the masks of the subtree
   std::vector<DepthInterval> hull;  // [min lower, max upper] of the subtree's valued intervals
-  std::vector<uint8_t> dead;
   // Per block: every valued interval of its subtree is point-like (see point_key), and the hash of
-  // those keys in subtree order. Only computed when the options ask for the point index.
+  // those keys in subtree order. Only computed when `points` is set.
   std::vector<uint8_t> point_like;
   std::vector<uint64_t> point_hash;
 
-  uint32_t child(uint32_t b, unsigned r) const { return h.child_block[h.block_first_child[b] + r]; }
-  DepthInterval& interval(uint32_t b, unsigned v) { return h.intervals[h.block_first_value[b] + v]; }
+  BlockSummaries(size_t blocks, bool points)
+      : height(blocks, 0), hash(blocks, 0), hull(blocks), point_like(points ? blocks : 0, 0),
+        point_hash(points ? blocks : 0, 0) {}
 
-  // Summary of block b from its children's, which must be summarised already (see merge_mmh: blocks
-  // in reverse breadth-first order, a loop where a recursive walk went depth-first through memory).
-  void summarize(uint32_t b) {
+  void summarize(const MhHierarchy& h, uint32_t b) {
     const uint8_t mask = h.block_mask[b];
     uint64_t hb = mix(0x6d68, mask);
     unsigned ht = 0;
@@ -69,13 +70,13 @@ struct Merger {
     bool points = true;
     uint64_t ph = 0x706f;
     for (unsigned v = 0; v < F::valued_children(mask); ++v) {
-      const DepthInterval& x = interval(b, v);
+      const DepthInterval& x = h.intervals[h.block_first_value[b] + v];
       hl.lower = std::min(hl.lower, x.lower), hl.upper = std::max(hl.upper, x.upper);
       uint64_t key = 0;
       if (index && (points = points && point_key(x, &key))) ph = mix(ph, key);
     }
     for (unsigned r = 0; r < F::branch_children(mask); ++r) {
-      const uint32_t c = child(b, r);
+      const uint32_t c = h.child_block[h.block_first_child[b] + r];
       hb = mix(hb, hash[c]);
       ht = std::max(ht, unsigned(height[c]) + 1);
       hl.lower = std::min(hl.lower, hull[c].lower), hl.upper = std::max(hl.upper, hull[c].upper);
@@ -86,6 +87,72 @@ struct Merger {
     hull[b] = hl;
     if (index) point_like[b] = points, point_hash[b] = ph;
   }
+};
+
+// The merge's bucket: blocks of one height and topology hash (masked to the options' bits).
+uint64_t bucket_key(const BlockSummaries& s, uint32_t b, uint64_t hash_mask) {
+  return mix(s.height[b], s.hash[b] & hash_mask);
+}
+// A point-like block's key in the point index: its bucket and the hash of its values.
+uint64_t point_slot_hash(uint64_t bucket, uint64_t point_hash) { return mix(point_hash, bucket); }
+
+// Reachable blocks in breadth-first order from the root; false when a block is referenced twice
+// (the input already shares) or the root is referenced.
+bool breadth_first_order(const MhHierarchy& h, std::vector<uint32_t>& order,
+                         std::vector<uint32_t>* parent_entry) {
+  order.clear();
+  if (h.root_mask == 0) return true;
+  std::vector<uint8_t> seen(parent_entry ? 0 : h.block_count(), 0);
+  order.push_back(h.root_block);
+  for (size_t k = 0; k < order.size(); ++k) {
+    const uint32_t b = order[k];
+    for (unsigned r = 0; r < F::branch_children(h.block_mask[b]); ++r) {
+      const uint32_t e = h.block_first_child[b] + r, c = h.child_block[e];
+      if (c == h.root_block) return false;
+      if (parent_entry) {
+        if ((*parent_entry)[c] != kNone) return false;
+        (*parent_entry)[c] = e;
+      } else {
+        if (seen[c]) return false;
+        seen[c] = 1;
+      }
+      order.push_back(c);
+    }
+  }
+  return true;
+}
+
+// Two bitsets over a key per block, a few bits per block (cache-resident where a table of the keys
+// would be tens of MiB): `unique[b]` = 1 proves that no other block of `blocks` has b's key; 0 is a
+// key seen twice, shared or a collision. Returns how many blocks got 0.
+template <class KeyOf>
+size_t mark_unique_keys(const std::vector<uint32_t>& blocks, KeyOf key_of, std::vector<uint8_t>& unique) {
+  thread_local std::vector<uint64_t> seen, seen_twice;
+  const size_t bits = std::bit_ceil(std::max<size_t>(64, 4 * blocks.size()));
+  seen.assign(bits / 64, 0);
+  seen_twice.assign(bits / 64, 0);
+  auto bit_of = [&](uint32_t b) { return size_t(key_of(b) >> 7) & (bits - 1); };
+  for (uint32_t b : blocks) {
+    const size_t i = bit_of(b);
+    const uint64_t bit = uint64_t(1) << (i % 64);
+    seen_twice[i / 64] |= seen[i / 64] & bit;
+    seen[i / 64] |= bit;
+  }
+  size_t repeated = 0;
+  for (uint32_t b : blocks) {
+    const size_t i = bit_of(b);
+    unique[b] = (seen_twice[i / 64] >> (i % 64) & 1) == 0;
+    repeated += !unique[b];
+  }
+  return repeated;
+}
+
+struct Merger {
+  MhHierarchy& h;
+  std::vector<uint8_t> dead;
+
+  uint32_t child(uint32_t b, unsigned r) const { return h.child_block[h.block_first_child[b] + r]; }
+  DepthInterval& interval(uint32_t b, unsigned v) { return h.intervals[h.block_first_value[b] + v]; }
 
   Match compare(uint32_t a, uint32_t r) {
     const uint8_t mask = h.block_mask[a];
@@ -171,19 +238,8 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
 
   // Parent entry of every reachable block; a second reference means the input already shares.
   std::vector<uint32_t> parent_entry(n, kNone), order;
-  if (h.root_mask != 0) {
-    order.push_back(h.root_block);
-    for (size_t k = 0; k < order.size(); ++k) {
-      const uint32_t b = order[k];
-      for (unsigned r = 0; r < F::branch_children(h.block_mask[b]); ++r) {
-        const uint32_t e = h.block_first_child[b] + r, c = h.child_block[e];
-        if (parent_entry[c] != kNone || c == h.root_block)
-          return make_error(ErrorCode::invalid_input, "MMH merge: input already shares blocks");
-        parent_entry[c] = e;
-        order.push_back(c);
-      }
-    }
-  }
+  if (!breadth_first_order(h, order, &parent_entry))
+    return make_error(ErrorCode::invalid_input, "MMH merge: input already shares blocks");
   st.blocks_before = order.size();
   if (order.size() <= 1) {
     st.blocks_after = order.size();
@@ -191,16 +247,11 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
   }
 
   const bool index_points = options.index_point_values;
-  Merger m{h,
-           std::vector<uint8_t>(n, 0),
-           std::vector<uint64_t>(n, 0),
-           std::vector<DepthInterval>(n),
-           std::vector<uint8_t>(n, 0),
-           std::vector<uint8_t>(index_points ? n : 0, 0),
-           std::vector<uint64_t>(index_points ? n : 0, 0)};
-  for (size_t k = order.size(); k-- > 0;) m.summarize(order[k]);  // children before parents
+  BlockSummaries summaries(n, index_points);
+  for (size_t k = order.size(); k-- > 0;) summaries.summarize(h, order[k]);  // children before parents
+  Merger m{h, std::vector<uint8_t>(n, 0)};
   // Tallest first; among equals, breadth-first order.
-  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return m.height[a] > m.height[b]; });
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return summaries.height[a] > summaries.height[b]; });
 
   const uint64_t hash_mask = options.hash_bits == 64 ? ~uint64_t(0) : (uint64_t(1) << options.hash_bits) - 1;
   // Representatives per bucket as parallel arrays (hull and first interval inline), so the scan of up
@@ -236,8 +287,8 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
     uint32_t rep;  // index in its bucket
   };
   std::vector<PointRep> point_reps;
-  auto slot_hash = [](uint64_t bucket, uint64_t point_hash) { return mix(point_hash, bucket); };
-  auto bucket_key_of = [&](uint32_t b) { return mix(m.height[b], m.hash[b] & hash_mask); };
+  auto slot_hash = point_slot_hash;
+  auto bucket_key_of = [&](uint32_t b) { return bucket_key(summaries, b, hash_mask); };
   // Point-like blocks whose (bucket, point hash) no other block shares can never meet a rep with
   // their key, nor be one another block finds: they skip the table. On a full-depth tree of distinct
   // floats that is most blocks, and each probe was a cache miss (a third of the merge's time). Two
@@ -247,26 +298,11 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
   std::vector<uint8_t> unique_key(index_points ? n : 0, 0);
   size_t keyed_blocks = 0;  // point-like blocks that use the table
   if (index_points) {
-    size_t point_blocks = 0;
-    for (uint32_t b : order) point_blocks += m.point_like[b];
-    thread_local std::vector<uint64_t> seen, seen_twice;
-    const size_t bits = std::bit_ceil(std::max<size_t>(64, 4 * point_blocks));
-    seen.assign(bits / 64, 0);
-    seen_twice.assign(bits / 64, 0);
-    auto bit_of = [&](uint32_t b) { return size_t(slot_hash(bucket_key_of(b), m.point_hash[b]) >> 7) & (bits - 1); };
-    for (uint32_t b : order) {
-      if (!m.point_like[b]) continue;
-      const size_t i = bit_of(b);
-      const uint64_t bit = uint64_t(1) << (i % 64);
-      seen_twice[i / 64] |= seen[i / 64] & bit;
-      seen[i / 64] |= bit;
-    }
-    for (uint32_t b : order) {
-      if (!m.point_like[b]) continue;
-      const size_t i = bit_of(b);
-      unique_key[b] = (seen_twice[i / 64] >> (i % 64) & 1) == 0;
-      keyed_blocks += !unique_key[b];
-    }
+    std::vector<uint32_t> point_blocks;
+    for (uint32_t b : order)
+      if (summaries.point_like[b]) point_blocks.push_back(b);
+    keyed_blocks = mark_unique_keys(
+        point_blocks, [&](uint32_t b) { return slot_hash(bucket_key_of(b), summaries.point_hash[b]); }, unique_key);
   }
   // Reused per thread: a fresh table would pay a page fault per 4 KiB on every tile.
   // In 2 MiB pages where the kernel allows: each probe is a random read of a table of up to tens of
@@ -293,15 +329,15 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
     const uint32_t b = order[position];
     if (index_points && position + kPrefetchAhead < order.size()) {
       const uint32_t ahead = order[position + kPrefetchAhead];
-      if (m.point_like[ahead] && !unique_key[ahead])
-        __builtin_prefetch(&latest_with_points[slot_hash(bucket_key_of(ahead), m.point_hash[ahead]) &
+      if (summaries.point_like[ahead] && !unique_key[ahead])
+        __builtin_prefetch(&latest_with_points[slot_hash(bucket_key_of(ahead), summaries.point_hash[ahead]) &
                                                (latest_with_points.size() - 1)]);
     }
     if (m.dead[b] || b == h.root_block) continue;
     const uint64_t bucket_key = bucket_key_of(b);
     Reps& reps = buckets[bucket_key];
-    const DepthInterval first = first_interval(b), hull = m.hull[b];
-    const float height = m.height[b];
+    const DepthInterval first = first_interval(b), hull = summaries.hull[b];
+    const float height = summaries.height[b];
     const size_t stop = reps.size() > options.max_tests_per_block ? reps.size() - options.max_tests_per_block : 0;
     auto try_merge = [&](size_t k) {  // full test against rep k; on a fit, b joins it
       ++st.full_tests;
@@ -317,7 +353,7 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
       return true;
     };
     bool merged = false;
-    const bool point_like = index_points && m.point_like[b];
+    const bool point_like = index_points && summaries.point_like[b];
     uint64_t* latest = nullptr;
     if (point_like) {
       // Intervals only shrink under narrowing, so a rep that fits b now fitted b when it joined. A rep
@@ -325,7 +361,7 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
       // others are the reps that were not point-like. Walking both lists most recent first, inside the
       // same window, finds the same first fit as the scan below, without testing the other reps.
       // At most one slot per keyed block: never full. A unique key has no slot and no same-key rep.
-      if (!unique_key[b]) latest = &latest_slot(bucket_key, m.point_hash[b]);
+      if (!unique_key[b]) latest = &latest_slot(bucket_key, summaries.point_hash[b]);
       uint32_t same = latest ? slot_rep(*latest) : kNone;
       size_t other = reps.not_point.size();
       while (!merged) {
@@ -374,8 +410,8 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
       if (point_like) {
         reps.previous_same_points.push_back(latest ? slot_rep(*latest) : kNone);
         if (latest) {
-          point_reps.push_back({bucket_key, m.point_hash[b], uint32_t(reps.size())});
-          *latest = (slot_hash(bucket_key, m.point_hash[b]) >> 32) << 32 | uint64_t(point_reps.size());
+          point_reps.push_back({bucket_key, summaries.point_hash[b], uint32_t(reps.size())});
+          *latest = (slot_hash(bucket_key, summaries.point_hash[b]) >> 32) << 32 | uint64_t(point_reps.size());
         }
       } else {
         reps.previous_same_points.push_back(kNone);
@@ -388,6 +424,49 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
   MhHierarchy out = compact(h);
   st.blocks_after = out.block_count();
   return out;
+}
+
+bool mmh_merge_finds_nothing(const MhHierarchy& tree) {
+  if (!check_structure(tree)) return false;
+  std::vector<uint32_t> order;
+  if (!breadth_first_order(tree, order, nullptr)) return false;
+  // Two blocks merge only when their topology is the same and every pair of intervals intersects,
+  // which point-like intervals do only when equal. Blocks that fit have children that fit, down to
+  // a pair of blocks without branch children ("leaf blocks"), distinct since the tree shares
+  // nothing. So: every block point-like and no two leaf blocks equal (mask and values) proves
+  // that nothing merges. A block with a wider interval may fit blocks of other values: only the
+  // merge can tell.
+  std::vector<uint64_t> leaf_keys;
+  leaf_keys.reserve(order.size());
+  // The last leaf keys seen, direct-mapped: equal blocks lie near each other in breadth-first order
+  // (a flat roof's rows), so a tile that merges usually says so here, before the bitsets and sort.
+  constexpr unsigned kRecentBits = 12;
+  std::array<uint64_t, size_t(1) << kRecentBits> recent{};
+  for (uint32_t b : order) {
+    if (b == tree.root_block) continue;  // never merged, never a representative
+    const uint8_t mask = tree.block_mask[b];
+    uint64_t key = 0x9e3779b97f4a7c15ull * (uint64_t(mask) + 1);
+    for (unsigned v = 0; v < F::valued_children(mask); ++v) {
+      uint64_t point = 0;
+      if (!point_key(tree.intervals[tree.block_first_value[b] + v], &point)) return false;
+      key = (key ^ point) * 0xbf58476d1ce4e5b9ull;
+    }
+    if (F::branch_children(mask) != 0) continue;
+    key = mix(key, 0) | 1;  // never 0, the empty slot
+    uint64_t& slot = recent[key >> (64 - kRecentBits)];
+    if (slot == key) return false;  // equal keys: perhaps equal blocks
+    slot = key;
+    leaf_keys.push_back(key);
+  }
+  std::vector<uint32_t> leaves(leaf_keys.size());
+  for (uint32_t i = 0; i < leaves.size(); ++i) leaves[i] = i;
+  std::vector<uint8_t> unique(leaves.size(), 0);
+  if (mark_unique_keys(leaves, [&](uint32_t i) { return leaf_keys[i]; }, unique) == 0) return true;
+  std::vector<uint64_t> repeated;  // the bitsets' maybes, settled exactly (equal keys: maybe equal)
+  for (uint32_t i : leaves)
+    if (!unique[i]) repeated.push_back(leaf_keys[i]);
+  std::sort(repeated.begin(), repeated.end());
+  return std::adjacent_find(repeated.begin(), repeated.end()) == repeated.end();
 }
 
 }  // namespace shadowtiles

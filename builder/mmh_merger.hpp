@@ -48,4 +48,12 @@ struct MmhMergeStats {
 Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& options = {},
                               MmhMergeStats* stats = nullptr);
 
+// True when merge_mmh(tree) provably merges no block (with any options), so its output encodes to
+// encode_mh(tree)'s bytes: every block but the root is point-like (all its intervals of zero width,
+// or the miss) and no two of them share height, topology and values, compared by a 64-bit hash of
+// all three (equal hashes answer false, never a wrong true). Full-depth trees of open meshes under
+// `anywhere` are mostly such tiles; the check is a summary pass and two bitsets, without the merge's
+// copy, table, renumbering and second encode. False also for a malformed or shared input.
+bool mmh_merge_finds_nothing(const MhHierarchy& tree);
+
 }  // namespace shadowtiles

@@ -57,9 +57,28 @@ Status process_tile(const TilePipelineInput& input, TileCoord tile, TilePipeline
     auto encoding = encode_tile(*input.methods, *intervals, input.encode_options);
     if (!encoding) return encoding.error();
     if (encoding->has_root) root = encoding->root;
+    // A payload byte-identical to an earlier method's of this tile (MMH where its merge finds
+    // nothing) reuses that method's zstd frame, and its preview where both decode alike.
+    struct Stored {
+      store::Method method;
+      const std::vector<uint8_t>* payload;
+      size_t blob_put;  // index in `puts`
+      store::TilePreview preview;
+    };
+    std::vector<Stored> stored;
     for (EncodedPayload& encoded : encoding->payloads) {
       auto blob_start = Clock::now();
-      auto blob = store::encode_blob(encoded.method, encoded.payload, 0, input.zstd_level);
+      const Stored* same = nullptr;
+      for (const Stored& earlier : stored)
+        if (*earlier.payload == encoded.payload) same = &earlier;
+      std::vector<uint8_t> blob;
+      if (same) {
+        auto copy = store::copy_blob_as(encoded.method, puts[same->blob_put].value);
+        if (!copy) return copy.error();
+        blob = std::move(*copy);
+      } else {
+        blob = store::encode_blob(encoded.method, encoded.payload, 0, input.zstd_level);
+      }
       const char* name = store::method_name(encoded.method);
       mine.encode_seconds_by_method[name] += encoded.seconds + seconds_since(blob_start);
       outcome.blob_bytes += blob.size();
@@ -71,15 +90,20 @@ Status process_tile(const TilePipelineInput& input, TileCoord tile, TilePipeline
       store::TileInfo info{encoding->has_root, root.lower, root.upper, blob.size(), encoded.payload.size()};
       auto info_bytes = store::encode_tile_info(info);
       puts.push_back({store::Database::tileinfo, {key.begin(), key.end()}, {info_bytes.begin(), info_bytes.end()}});
+      const size_t blob_put = puts.size();
       puts.push_back({store::Database::tiles, {key.begin(), key.end()}, std::move(blob)});
       // The inspector's preview of this tile, committed with it (store/tile_preview.hpp).
       auto preview_start = Clock::now();
-      auto preview = make_tile_preview(*intervals, encoded.method, encoded.payload);
+      Result<store::TilePreview> preview =
+          same && previews_decode_alike(same->method, encoded.method)
+              ? Result<store::TilePreview>(same->preview)
+              : make_tile_preview(*intervals, encoded.method, encoded.payload);
       if (!preview) return preview.error();
       auto preview_blob = store::encode_preview(encoded.method, *preview, input.zstd_level);
       mine.preview_seconds += seconds_since(preview_start);
       mine.preview_bytes += preview_blob.size();
       puts.push_back({store::Database::preview, {key.begin(), key.end()}, std::move(preview_blob)});
+      stored.push_back({encoded.method, &encoded.payload, blob_put, std::move(*preview)});
     }
     ++mine.stored_tiles;
   }

@@ -46,11 +46,15 @@ Result<store::TilePreview> sample_view_preview(const TileIntervals& intervals, s
   return sample_preview(intervals, view->size(), [&](uint32_t u, uint32_t v) { return view->lookup(u, v); });
 }
 
+bool mh_family(store::Method method) { return method == store::Method::mh || method == store::Method::mmh; }
+
 }  // namespace
+
+bool previews_decode_alike(store::Method a, store::Method b) { return a == b || (mh_family(a) && mh_family(b)); }
 
 Result<store::TilePreview> make_tile_preview(const TileIntervals& intervals, store::Method method,
                                              std::span<const uint8_t> payload) {
-  if (method == store::Method::mh || method == store::Method::mmh)
+  if (mh_family(method))
     return sample_view_preview<MhTileView, MhParseOptions>(intervals, payload);
   if (method == store::Method::dagmh) return sample_view_preview<DagMhTileView, DagMhParseOptions>(intervals, payload);
   auto decoded = decode_tile(method, payload);

@@ -17,4 +17,8 @@ namespace shadowtiles {
 Result<store::TilePreview> make_tile_preview(const TileIntervals& intervals, store::Method method,
                                              std::span<const uint8_t> payload);
 
+// Whether make_tile_preview reads a payload of method `a` and one of method `b` the same way (MH and
+// MMH share a format), so equal payloads give equal previews.
+bool previews_decode_alike(store::Method a, store::Method b);
+
 }  // namespace shadowtiles

@@ -95,6 +95,17 @@ std::vector<uint8_t> encode_blob(Method method, std::span<const uint8_t> raw_pay
   return blob;
 }
 
+Result<std::vector<uint8_t>> copy_blob_as(Method method, std::span<const uint8_t> blob) {
+  if (auto header = check_blob(blob); !header) return header.error();
+  std::vector<uint8_t> copy(blob.begin(), blob.end());
+  uint8_t* h = copy.data();
+  h[kMethodOffset] = static_cast<uint8_t>(method);
+  const uint64_t checksum = blob_checksum(std::span(h, kChecksumOffset),
+                                          std::span(copy).subspan(kBlobHeaderSize));
+  bytes::store_le<uint64_t>(h + kChecksumOffset, checksum);
+  return copy;
+}
+
 Result<BlobHeader> check_blob(std::span<const uint8_t> blob) {
   if (blob.size() < kBlobHeaderSize) {
     return corrupt("truncated header (" + std::to_string(blob.size()) + " bytes)");

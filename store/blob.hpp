@@ -49,6 +49,11 @@ struct BlobHeader {
 std::vector<uint8_t> encode_blob(Method method, std::span<const uint8_t> raw_payload,
                                  uint8_t flags = 0, int zstd_level = 3);
 
+// A copy of `blob` (as encode_blob made it) that names `method` instead, checksum redone and zstd
+// frame reused: for a payload two methods of one tile share byte for byte (MMH where its merge finds
+// nothing is MH's payload), without compressing it twice. Errors: those of check_blob on `blob`.
+Result<std::vector<uint8_t>> copy_blob_as(Method method, std::span<const uint8_t> blob);
+
 // Validates magic, version, method, sizes and checksum without decompressing; returns the header.
 // Cheap enough for the server to run on every blob it serves.
 Result<BlobHeader> check_blob(std::span<const uint8_t> blob);

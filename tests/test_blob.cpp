@@ -52,6 +52,25 @@ TEST(Blob, RoundTripRandomPayloads) {
   }
 }
 
+TEST(Blob, CopyAsAnotherMethodKeepsThePayloadAndRedoesTheChecksum) {
+  const std::vector<uint8_t> raw = random_bytes(5000, 11, true);
+  const std::vector<uint8_t> blob = encode_blob(Method::mh, raw, 0, 3);
+  Result<std::vector<uint8_t>> copy = copy_blob_as(Method::mmh, blob);
+  ASSERT_TRUE(copy.ok()) << copy.error().message;
+  BlobHeader original{}, copied{};
+  ASSERT_TRUE(decode_blob(blob, &original).ok());
+  Result<std::vector<uint8_t>> decoded = decode_blob(*copy, &copied);
+  ASSERT_TRUE(decoded.ok()) << decoded.error().message;
+  EXPECT_EQ(*decoded, raw);
+  EXPECT_EQ(copied.method, Method::mmh);
+  EXPECT_NE(copied.checksum, original.checksum);  // the ETag names the method's blob
+  // The same bytes encode_blob gives for that method: one frame, two headers.
+  EXPECT_EQ(*copy, encode_blob(Method::mmh, raw, 0, 3));
+  std::vector<uint8_t> corrupt = blob;
+  corrupt.back() ^= 1;
+  EXPECT_FALSE(copy_blob_as(Method::mmh, corrupt).ok());
+}
+
 TEST(Blob, HeaderLayoutIsStable) {
   // FORMAT: these bytes must not change within a format version (other readers rely on them).
   const std::vector<uint8_t> blob = encode_blob(Method::mmh, std::vector<uint8_t>(10, 42), 0x81);

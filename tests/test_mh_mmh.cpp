@@ -2,7 +2,9 @@
 // hash collisions still exact.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <tuple>
+#include <utility>
 
 #include "builder/mh_builder.hpp"
 #include "builder/mh_encoder.hpp"
@@ -148,6 +150,79 @@ TEST(Mmh, RejectsSharedInputAndBadOptions) {
   MmhMergeOptions bad;
   bad.hash_bits = 0;
   EXPECT_FALSE(merge_mmh(*tree, bad).ok());
+}
+
+// mmh_merge_finds_nothing's true must mean the merge finds nothing, so MMH is MH byte for byte.
+void expect_proof_holds(const TileIntervals& tile, const char* what) {
+  auto tree = build_mh(tile);
+  ASSERT_TRUE(tree.ok());
+  if (!mmh_merge_finds_nothing(*tree)) return;
+  MmhMergeStats stats;
+  auto merged = merge_mmh(*tree, {}, &stats);
+  ASSERT_TRUE(merged.ok());
+  EXPECT_EQ(stats.merges, 0u) << what;
+  EXPECT_EQ(*encode_mh(*merged), *encode_mh(*tree)) << what;
+}
+
+// A copy of the 2x2 texels at (0, 0) over those at (u, v): two equal leaf blocks.
+TileIntervals with_block_copied(TileIntervals tile, uint32_t u, uint32_t v) {
+  for (uint32_t y = 0; y < 2; ++y)
+    for (uint32_t x = 0; x < 2; ++x) tile.texels[size_t(v + y) * tile.size + u + x] = tile.at(x, y);
+  return tile;
+}
+
+TEST(Mmh, NothingToMergeIsProvedOnlyWhereTheMergeFindsNothing) {
+  // An open surface of distinct depths: every block point-like, no two alike.
+  const TileIntervals plane = make_synthetic_tile(MhSyntheticKind::noisy_plane, 256, 5);
+  auto tree = build_mh(plane);
+  ASSERT_TRUE(tree.ok());
+  ASSERT_TRUE(mmh_merge_finds_nothing(*tree));
+  expect_proof_holds(plane, "noisy_plane");
+  for (MhSyntheticKind kind : kKinds)
+    for (uint32_t size : {2u, 16u, 128u}) expect_proof_holds(make_synthetic_tile(kind, size, 7), synthetic_kind_name(kind));
+
+  // Two equal 2x2 blocks, neighbours or far apart in breadth-first order: a merge that tests every
+  // representative shares them (the default's window of 1024 misses the far pair), and the check
+  // must not claim otherwise.
+  MmhMergeOptions unbounded;
+  unbounded.max_tests_per_block = ~0u;
+  for (auto [u, v] : {std::pair{2u, 0u}, std::pair{200u, 200u}}) {
+    const TileIntervals twins = with_block_copied(plane, u, v);
+    auto twin_tree = build_mh(twins);
+    ASSERT_TRUE(twin_tree.ok());
+    MmhMergeStats stats;
+    ASSERT_TRUE(merge_mmh(*twin_tree, unbounded, &stats).ok());
+    EXPECT_GT(stats.merges, 0u) << u << "," << v;
+    EXPECT_FALSE(mmh_merge_finds_nothing(*twin_tree)) << u << "," << v;
+  }
+
+  // A wide interval fits a block of other values: twins but for one texel's upper bound merge, so
+  // the check must not prove them apart by their values.
+  TileIntervals widened = with_block_copied(plane, 2, 0);
+  DepthInterval& wide = widened.texels[3];  // (3, 0): a value its leaf block keeps (not its first)
+  wide.upper = std::nextafter(wide.upper, 1.0f);
+  auto widened_tree = build_mh(widened);
+  ASSERT_TRUE(widened_tree.ok());
+  MmhMergeStats widened_stats;
+  ASSERT_TRUE(merge_mmh(*widened_tree, {}, &widened_stats).ok());
+  EXPECT_GT(widened_stats.merges, 0u);
+  EXPECT_FALSE(mmh_merge_finds_nothing(*widened_tree));
+
+  // Wide intervals (a closed solid) may fit blocks of other values: not provable.
+  auto solid = build_mh(make_synthetic_tile(MhSyntheticKind::closed_plane, 64, 5));
+  ASSERT_TRUE(solid.ok());
+  EXPECT_FALSE(mmh_merge_finds_nothing(*solid));
+
+  // An input that already shares blocks, or a malformed one, is never "nothing to merge".
+  auto steps = build_mh(make_synthetic_tile(MhSyntheticKind::steps, 64, 2));
+  ASSERT_TRUE(steps.ok());
+  auto shared = merge_mmh(*steps);
+  ASSERT_TRUE(shared.ok());
+  ASSERT_LT(shared->block_count(), steps->block_count());
+  EXPECT_FALSE(mmh_merge_finds_nothing(*shared));
+  MhHierarchy broken = *tree;
+  broken.child_block.back() = uint32_t(broken.block_count() + 5);
+  EXPECT_FALSE(mmh_merge_finds_nothing(broken));
 }
 
 }  // namespace
