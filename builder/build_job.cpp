@@ -149,7 +149,7 @@ nlohmann::json plan_json(const std::vector<ShardRange>& plan) {
 nlohmann::json cap_pass_json(const SecondLayerCapCounts& caps) {
   const ReceiverCapCounts& t = caps.texels;
   return {{"pairs_tested", caps.pairs_tested}, {"regions", caps.regions}, {"near_regions", caps.near_regions},
-          {"skipped", caps.skipped},
+          {"skipped", caps.skipped}, {"triangles_without_capped_texels", t.triangles_skipped},
           {"texels", {{"clipped", t.clipped}, {"interior", t.interior}, {"fallback", t.fallback},
                       {"already_lower", t.already_lower}, {"corner", t.corner}, {"chord", t.chord}}}};
 }

@@ -350,7 +350,7 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
         options_.receivers == ReceiverContract::surfaces
             ? second_layer_caps(scene_, tile, options_.coplanar_epsilon, *intervals, options_.exit_margin,
                                 &local.caps, std::move(storage), buffers ? &buffers->second_layer : nullptr)
-            : receiver_surface_caps(scene_, tile, &local.caps.texels, std::move(storage));
+            : receiver_surface_caps(scene_, tile, &local.caps.texels, std::move(storage), &*intervals);
     apply_exit_caps(*intervals, caps, options_.exit_margin);
     if (buffers) buffers->caps = std::move(caps);
   }
@@ -364,7 +364,7 @@ Result<TileIntervals> DualDepthRenderer::render(TileCoord tile, DualDepthStats* 
 void apply_exit_caps(TileIntervals& intervals, std::span<const float> caps, float exit_margin) {
   for (size_t i = 0; i < intervals.texels.size(); ++i) {
     DepthInterval& interval = intervals.texels[i];
-    if (interval.upper > interval.lower && interval.lower < 1.0f)
+    if (takes_exit_cap(interval))
       interval.upper = std::max(interval.lower, std::min(interval.upper, caps[i] - exit_margin));
   }
 }

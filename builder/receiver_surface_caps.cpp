@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "common/float_rounding.hpp"
 
@@ -221,21 +222,79 @@ void interior_span(const InteriorPlane& plane, double sv, double u0, double& fir
   last = std::min(last, std::floor(hi_su - u0));
 }
 
+// The texels whose closed squares the triangle's bounding box touches, clamped to the window; false
+// when it touches none. Closed: a box starting exactly on a texel border (a heightfield's grid line
+// on a tile border) touches the texel left of (below) that border too, so the box is floored less
+// one texel, and a box starting on the window's far border still reaches its last column (row).
+struct TexelBox {
+  uint32_t i0, i1, j0, j1;
+};
+bool rasterised_box(const LightSpacePoint& a, const LightSpacePoint& b, const LightSpacePoint& c,
+                    const TexelWindow& window, TexelBox& box) {
+  const uint32_t size = window.size;
+  const double lo_u = std::min({a.u, b.u, c.u}) - window.u0, hi_u = std::max({a.u, b.u, c.u}) - window.u0;
+  const double lo_v = std::min({a.v, b.v, c.v}) - window.v0, hi_v = std::max({a.v, b.v, c.v}) - window.v0;
+  if (hi_u < 0 || hi_v < 0 || lo_u > size || lo_v > size) return false;
+  box.i0 = uint32_t(std::max(0.0, std::floor(lo_u) - 1)), box.i1 = uint32_t(std::min(size - 1.0, std::floor(hi_u)));
+  box.j0 = uint32_t(std::max(0.0, std::floor(lo_v) - 1)), box.j1 = uint32_t(std::min(size - 1.0, std::floor(hi_v)));
+  return true;
+}
+
+// The texels whose caps apply_exit_caps reads (takes_exit_cap), asked per block of kBlock^2 texels
+// and remembered: a triangle whose texel box meets no block holding one can be skipped. Blocks are
+// looked at only when a triangle's box reaches them, and a block of a solid answers at its first
+// texel, so a tile of misses or of solids costs next to nothing.
+class CappedTexelBlocks {
+ public:
+  static constexpr uint32_t kBlock = 16;
+
+  explicit CappedTexelBlocks(const TileIntervals& intervals)
+      : intervals_(intervals), size_(intervals.size), blocks_((intervals.size + kBlock - 1) / kBlock),
+        state_(size_t(blocks_) * blocks_, kUnknown) {}
+
+  // Whether the texels lower_caps_by_triangle would visit for (a, b, c) (rasterised_box, which it
+  // uses too) hold one that takes a cap: a skip loses nothing.
+  bool any_near(const LightSpacePoint& a, const LightSpacePoint& b, const LightSpacePoint& c,
+                const TexelWindow& window) {
+    TexelBox box;
+    if (!rasterised_box(a, b, c, window, box)) return false;  // it would touch nothing
+    for (uint32_t bj = box.j0 / kBlock; bj <= box.j1 / kBlock; ++bj)
+      for (uint32_t bi = box.i0 / kBlock; bi <= box.i1 / kBlock; ++bi)
+        if (block_has_capped(bi, bj)) return true;
+    return false;
+  }
+
+ private:
+  static constexpr uint8_t kUnknown = 2;
+  const TileIntervals& intervals_;
+  uint32_t size_, blocks_;
+  std::vector<uint8_t> state_;  // per block: 0 none, 1 some, kUnknown not looked at yet
+
+  bool block_has_capped(uint32_t bi, uint32_t bj) {
+    uint8_t& state = state_[size_t(bj) * blocks_ + bi];
+    if (state == kUnknown) {
+      state = 0;
+      const uint32_t u_end = std::min(size_, (bi + 1) * kBlock), v_end = std::min(size_, (bj + 1) * kBlock);
+      for (uint32_t v = bj * kBlock; v < v_end && !state; ++v)
+        for (uint32_t u = bi * kBlock; u < u_end; ++u)
+          if (takes_exit_cap(intervals_.at(u, v))) {
+            state = 1;
+            break;
+          }
+    }
+    return state == 1;
+  }
+};
+
 }  // namespace
 
 void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, const LightSpacePoint& c,
                             const TexelWindow& window, std::span<float> cap, ReceiverCapCounts* counts) {
   const uint32_t size = window.size;
   const double u0 = window.u0, v0 = window.v0;
-  // The texels whose closed squares the bounding box touches, clamped. Closed: a box starting exactly
-  // on a texel border (a heightfield's grid line on a tile border) touches the texel left of (below)
-  // that border too, so the box is floored less one texel, and a box starting on the window's far
-  // border still reaches its last column (row).
-  const double lo_u = std::min({a.u, b.u, c.u}) - u0, hi_u = std::max({a.u, b.u, c.u}) - u0;
-  const double lo_v = std::min({a.v, b.v, c.v}) - v0, hi_v = std::max({a.v, b.v, c.v}) - v0;
-  if (hi_u < 0 || hi_v < 0 || lo_u > size || lo_v > size) return;
-  const uint32_t i0 = uint32_t(std::max(0.0, std::floor(lo_u) - 1)), i1 = uint32_t(std::min(size - 1.0, std::floor(hi_u)));
-  const uint32_t j0 = uint32_t(std::max(0.0, std::floor(lo_v) - 1)), j1 = uint32_t(std::min(size - 1.0, std::floor(hi_v)));
+  TexelBox texels;
+  if (!rasterised_box(a, b, c, window, texels)) return;
+  const uint32_t i0 = texels.i0, i1 = texels.i1, j0 = texels.j0, j1 = texels.j1;
 
   InteriorPlane plane;
   const bool has_interior = make_interior_plane(a, b, c, plane);
@@ -318,11 +377,13 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
 }
 
 std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord tile, ReceiverCapCounts* counts,
-                                         std::vector<float> storage) {
+                                         std::vector<float> storage, const TileIntervals* intervals) {
   const uint32_t size = scene.layout().tile_size();
   const TexelWindow window{double(tile.x) * size, double(tile.y) * size, size};
   std::vector<float> cap = std::move(storage);
   cap.assign(size_t(size) * size, std::numeric_limits<float>::infinity());
+  std::optional<CappedTexelBlocks> capped;
+  if (intervals && intervals->size == size) capped.emplace(*intervals);
   const Scene& world = scene.scene();
   for (uint32_t t : scene.triangles_of(tile)) {
     const auto& tri = world.triangles[t];
@@ -332,6 +393,10 @@ std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord
     const MeshKind kind = world.meshes[world.triangle_mesh[t]].kind;
     const double nz = (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
     if (kind != MeshKind::open && nz < 0) continue;  // faces the light: an entry surface, the lit side
+    if (capped && !capped->any_near(a, b, c, window)) {
+      if (counts) ++counts->triangles_skipped;
+      continue;
+    }
     lower_caps_by_triangle(a, b, c, window, cap, counts);
   }
   // A patch over a nearly closed mesh's hole bounds its solid like the mesh's own faces: receivers lie
@@ -343,6 +408,10 @@ std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord
     const LightSpacePoint& c = scene.vertex(tri[2]);
     const double nz = (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
     if (nz < 0) continue;
+    if (capped && !capped->any_near(a, b, c, window)) {
+      if (counts) ++counts->triangles_skipped;
+      continue;
+    }
     lower_caps_by_triangle(a, b, c, window, cap, counts);
   }
   return cap;

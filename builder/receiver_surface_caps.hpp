@@ -20,6 +20,7 @@
 #include <span>
 #include <vector>
 
+#include "builder/depth_interval.hpp"
 #include "builder/light_space_scene.hpp"
 
 namespace shadowtiles {
@@ -35,10 +36,13 @@ struct ReceiverCapCounts {
   uint64_t corner = 0;         // of those to clip (counted in `clipped`), texels whose shallowest
                                // square corner lies inside the triangle: closed form, unclipped
   uint64_t chord = 0;          // ... crossed by one edge only, that corner outside: the edge's chord
+  uint64_t triangles_skipped = 0;  // with the tile's intervals given: triangles near no texel that
+                                   // takes a cap, not rasterised (their texels are not counted above)
 
   void add(const ReceiverCapCounts& other) {
     clipped += other.clipped, interior += other.interior, fallback += other.fallback;
     already_lower += other.already_lower, corner += other.corner, chord += other.chord;
+    triangles_skipped += other.triangles_skipped;
   }
 };
 
@@ -57,7 +61,18 @@ void lower_caps_by_triangle(const LightSpacePoint& a, const LightSpacePoint& b, 
 // The cap per texel of `tile` (+inf where nothing limits it), over the tile's triangles that a
 // shadowed receiver can lie on. `storage`: a buffer to reuse (its pages already mapped), e.g. the
 // previous tile's caps.
+// With `intervals` (the tile's, from the renderer), only the caps apply_exit_caps reads are computed:
+// a triangle whose texels (its rasterised box) hold no interval that takes a cap is skipped, so other
+// texels may keep +inf or a higher cap. Under `anywhere` on open meshes nearly every hit is a point
+// interval, which no cap changes, and only the solids' texels take one.
 std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord tile,
-                                         ReceiverCapCounts* counts = nullptr, std::vector<float> storage = {});
+                                         ReceiverCapCounts* counts = nullptr, std::vector<float> storage = {},
+                                         const TileIntervals* intervals = nullptr);
+
+// Whether apply_exit_caps lowers this interval's upper bound to a cap: an exit below a hit. A point
+// interval (open geometry under `anywhere`) or a miss keeps its bounds whatever the cap.
+inline bool takes_exit_cap(const DepthInterval& interval) {
+  return interval.upper > interval.lower && interval.lower < 1.0f;
+}
 
 }  // namespace shadowtiles

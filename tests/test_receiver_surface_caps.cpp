@@ -12,6 +12,8 @@
 #include <random>
 #include <vector>
 
+#include "builder/dual_depth_renderer.hpp"
+#include "builder/embree_device.hpp"
 #include "builder/receiver_surface_caps.hpp"
 #include "receiver_surface_caps_reference.hpp"
 
@@ -244,6 +246,56 @@ TEST(ReceiverSurfaceCaps, HouseTilesMatchTheClipping) {
 
 TEST(ReceiverSurfaceCaps, TerrainTilesMatchTheClipping) {
   expect_scene_identical("terragen/RealisticTerrain.ter", UpAxis::z, {"*"}, 135, 30, 2048, 512);
+}
+
+// Given the tile's intervals, the pass skips triangles near no texel that takes a cap; every cap an
+// exit takes is the same float, so the capped intervals are the same. The IFC house under
+// `anywhere`: open walls and roofs (point intervals) beside a few closed solids.
+TEST(ReceiverSurfaceCaps, GivenTheIntervalsEveryCapAnExitTakesIsUnchanged) {
+  LoadOptions load;
+  load.up = UpAxis::y;
+  auto scene = load_scene(testing::shared_scene("fzk_haus/fzk_haus.obj"), load);
+  ASSERT_TRUE(scene.ok()) << scene.error().message;
+  const uint32_t resolution = 2048;
+  auto frame = LightFrame::fit(*light_direction_from_sun(135, 45, UpAxis::y), scene->bounds, resolution);
+  auto layout = TileLayout::make(resolution, 512);
+  ASSERT_TRUE(frame.ok() && layout.ok());
+  LightSpaceScene light_scene(*scene, *frame, *layout);
+  auto device = EmbreeDevice::create();
+  ASSERT_TRUE(device.ok());
+  DualDepthOptions options;
+  options.exit_margin = float(4.0 / resolution);
+  options.cap_exits_at_receiver_surfaces = true;
+  DualDepthRenderer renderer(*device, light_scene, options);
+  ReceiverCapCounts all, given;
+  size_t taking = 0, differing = 0;
+  for (uint32_t y = 0; y < layout->tiles_per_side(); ++y)
+    for (uint32_t x = 0; x < layout->tiles_per_side(); ++x) {
+      auto intervals = renderer.render_centre({x, y});
+      ASSERT_TRUE(intervals.ok());
+      const std::vector<float> every = receiver_surface_caps(light_scene, {x, y}, &all);
+      const std::vector<float> needed = receiver_surface_caps(light_scene, {x, y}, &given, {}, &*intervals);
+      for (size_t i = 0; i < every.size(); ++i) {
+        if (!takes_exit_cap(intervals->texels[i])) continue;
+        ++taking;
+        differing += std::bit_cast<uint32_t>(every[i]) != std::bit_cast<uint32_t>(needed[i]);
+      }
+      TileIntervals from_every = *intervals, from_needed = *intervals;
+      apply_exit_caps(from_every, every, options.exit_margin);
+      apply_exit_caps(from_needed, needed, options.exit_margin);
+      for (size_t i = 0; i < every.size(); ++i) {
+        ASSERT_EQ(from_every.texels[i].lower, from_needed.texels[i].lower);
+        ASSERT_EQ(from_every.texels[i].upper, from_needed.texels[i].upper) << "tile " << x << "," << y << " texel " << i;
+      }
+    }
+  EXPECT_EQ(differing, 0u);
+  EXPECT_GT(taking, 1000u);  // the solids' exits: the caps that matter are there to compare
+  EXPECT_EQ(all.triangles_skipped, 0u);
+  EXPECT_GT(given.triangles_skipped, 0u);
+  EXPECT_LT(given.interior + given.clipped, (all.interior + all.clipped) / 2);  // most of the pass saved
+  std::printf("texels taking a cap %zu; triangles skipped %llu; texels rasterised %llu of %llu\n", taking,
+              (unsigned long long)given.triangles_skipped, (unsigned long long)(given.interior + given.clipped),
+              (unsigned long long)(all.interior + all.clipped));
 }
 
 TEST(ReceiverSurfaceCaps, BustTilesMatchTheClipping) {
