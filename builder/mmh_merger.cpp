@@ -427,28 +427,30 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
 }
 
 bool mmh_merge_finds_nothing(const MhHierarchy& tree) {
-  if (!check_structure(tree)) return false;
-  std::vector<uint32_t> order;
-  if (!breadth_first_order(tree, order, nullptr)) return false;
   // Two blocks merge only when their topology is the same and every pair of intervals intersects,
   // which point-like intervals do only when equal. Blocks that fit have children that fit, down to
-  // a pair of blocks without branch children ("leaf blocks"), distinct since the tree shares
+  // a pair of blocks without branch children ("leaf blocks"), distinct when the tree shares
   // nothing. So: every block point-like and no two leaf blocks equal (mask and values) proves
   // that nothing merges. A block with a wider interval may fit blocks of other values: only the
-  // merge can tell.
+  // merge can tell. Blocks are read in index order (build_mh's is breadth-first), unreachable ones
+  // too (one more condition each), so that a tile that merges says so before the structure checks.
+  const size_t n = tree.block_count();
+  if (tree.block_first_value.size() != n) return false;
   std::vector<uint64_t> leaf_keys;
-  leaf_keys.reserve(order.size());
+  leaf_keys.reserve(n);
   // The last leaf keys seen, direct-mapped: equal blocks lie near each other in breadth-first order
   // (a flat roof's rows), so a tile that merges usually says so here, before the bitsets and sort.
   constexpr unsigned kRecentBits = 12;
   std::array<uint64_t, size_t(1) << kRecentBits> recent{};
-  for (uint32_t b : order) {
-    if (b == tree.root_block) continue;  // never merged, never a representative
+  for (uint32_t b = 0; b < n; ++b) {
+    if (b == tree.root_block && tree.root_mask != 0) continue;  // never merged, never a representative
     const uint8_t mask = tree.block_mask[b];
+    const size_t first = tree.block_first_value[b];
+    if (first + F::valued_children(mask) > tree.intervals.size()) return false;  // malformed
     uint64_t key = 0x9e3779b97f4a7c15ull * (uint64_t(mask) + 1);
     for (unsigned v = 0; v < F::valued_children(mask); ++v) {
       uint64_t point = 0;
-      if (!point_key(tree.intervals[tree.block_first_value[b] + v], &point)) return false;
+      if (!point_key(tree.intervals[first + v], &point)) return false;
       key = (key ^ point) * 0xbf58476d1ce4e5b9ull;
     }
     if (F::branch_children(mask) != 0) continue;
@@ -458,6 +460,8 @@ bool mmh_merge_finds_nothing(const MhHierarchy& tree) {
     slot = key;
     leaf_keys.push_back(key);
   }
+  std::vector<uint32_t> order;
+  if (!check_structure(tree) || !breadth_first_order(tree, order, nullptr)) return false;  // or shared
   std::vector<uint32_t> leaves(leaf_keys.size());
   for (uint32_t i = 0; i < leaves.size(); ++i) leaves[i] = i;
   std::vector<uint8_t> unique(leaves.size(), 0);
