@@ -251,7 +251,16 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
   for (size_t k = order.size(); k-- > 0;) summaries.summarize(h, order[k]);  // children before parents
   Merger m{h, std::vector<uint8_t>(n, 0)};
   // Tallest first; among equals, breadth-first order.
-  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return summaries.height[a] > summaries.height[b]; });
+  // A counting sort: heights are at most the levels (<= 20 here, < 256 by type), and this gives
+  // std::stable_sort's order in one pass instead of n log n moves (1.5 % of honolulu's build).
+  {
+    std::array<size_t, 257> start{};
+    for (uint32_t b : order) ++start[255 - summaries.height[b] + 1];
+    for (size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+    std::vector<uint32_t> sorted(order.size());
+    for (uint32_t b : order) sorted[start[255 - summaries.height[b]]++] = b;
+    order.swap(sorted);
+  }
 
   const uint64_t hash_mask = options.hash_bits == 64 ? ~uint64_t(0) : (uint64_t(1) << options.hash_bits) - 1;
   // Representatives per bucket as parallel arrays (hull and first interval inline), so the scan of up
@@ -278,6 +287,8 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
     return m.interval(b, 0);
   };
   std::unordered_map<uint64_t, Reps> buckets;
+  uint64_t last_bucket_key = 0;
+  Reps* last_reps = nullptr;
   // (bucket, point hash) -> the bucket's most recent point-like rep with that hash: a flat
   // open-addressing table of 8-byte slots (tag | 1 + point rep id), verified against the point reps'
   // own arrays. std::unordered_map's node per entry, or wider slots, cost more than the scan saves.
@@ -335,7 +346,10 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
     }
     if (m.dead[b] || b == h.root_block) continue;
     const uint64_t bucket_key = bucket_key_of(b);
-    Reps& reps = buckets[bucket_key];
+    // Neighbours in this order mostly share a bucket (a height's full blocks): the last one found is
+    // kept (std::unordered_map's nodes do not move), saving a hash lookup per block.
+    if (bucket_key != last_bucket_key || !last_reps) last_reps = &buckets[bucket_key], last_bucket_key = bucket_key;
+    Reps& reps = *last_reps;
     const DepthInterval first = first_interval(b), hull = summaries.hull[b];
     const float height = summaries.height[b];
     const size_t stop = reps.size() > options.max_tests_per_block ? reps.size() - options.max_tests_per_block : 0;
