@@ -20,7 +20,7 @@ void put_offset(uint8_t* p, uint32_t x, unsigned width) { std::memcpy(p, &x, wid
 }  // namespace
 
 uint64_t sbe16a_reference_bytes(const MhHierarchy& h) {
-  const MhNodeCounts c = count_nodes(h);
+  const MhNodeCounts c = count_stored_nodes(h);
   return 8 * c.inner + 4 * (c.empty + c.leaves);
 }
 

@@ -62,6 +62,35 @@ MhNodeCounts count_nodes(const MhHierarchy& h) {
   return c.counts;
 }
 
+MhNodeCounts count_stored_nodes(const MhHierarchy& h) {
+  MhNodeCounts counts;
+  if (h.root_mask == 0) {
+    counts.leaves = 1;
+    return counts;
+  }
+  counts.inner = 1;
+  std::vector<uint8_t> seen(h.block_count(), 0);
+  std::vector<uint32_t> stack{h.root_block};
+  seen[h.root_block] = 1;
+  while (!stack.empty()) {
+    const uint32_t b = stack.back();
+    stack.pop_back();
+    counts.blocks += 1;
+    const uint8_t mask = h.block_mask[b];
+    unsigned r = 0;
+    for (unsigned i = 0; i < 4; ++i) {
+      const unsigned code = F::child_code(mask, i);
+      counts.leaves += code == F::kCodeLeaf;
+      counts.empty += code == F::kCodeEmpty;
+      counts.inner += code == F::kCodeInner;
+      if (!(code & 2u)) continue;
+      const uint32_t c = h.child_block[h.block_first_child[b] + r++];
+      if (!seen[c]) seen[c] = 1, stack.push_back(c);
+    }
+  }
+  return counts;
+}
+
 Status check_structure(const MhHierarchy& h) {
   auto fail = [](const std::string& m) { return Status(make_error(ErrorCode::invalid_input, "MH hierarchy: " + m)); };
   if (h.levels > 20 || h.size != (uint32_t(1) << h.levels)) return fail("size is not 2^levels");

@@ -13,6 +13,7 @@
 #include "builder/mh_builder.hpp"
 #include "builder/mh_dense_levels.hpp"
 #include "builder/mh_encoder.hpp"
+#include "builder/mmh_merger.hpp"
 #include "builder/mh_synthetic.hpp"
 #include "builder/mh_verify.hpp"
 #include "codec/mh_decoder.hpp"
@@ -372,6 +373,19 @@ TEST(MhEncode, ReferenceSizeCountsNodeTypes) {
   EXPECT_EQ(e.view.stats().inner_nodes, c.inner);
   EXPECT_EQ(e.view.stats().empty_nodes, c.empty);
   EXPECT_EQ(e.view.stats().leaf_nodes, c.leaves);
+  // Shared blocks count once, as count_nodes counts them.
+  MmhMergeStats stats;
+  auto merged = merge_mmh(*h, {}, &stats);
+  ASSERT_TRUE(merged.ok());
+  ASSERT_GT(stats.merges, 0u);
+  for (const MhHierarchy* tree : {&*h, &*merged}) {
+    const MhNodeCounts all = count_nodes(*tree), stored = count_stored_nodes(*tree);
+    EXPECT_EQ(stored.blocks, all.blocks);
+    EXPECT_EQ(stored.inner, all.inner);
+    EXPECT_EQ(stored.empty, all.empty);
+    EXPECT_EQ(stored.leaves, all.leaves);
+    EXPECT_EQ(sbe16a_reference_bytes(*tree), 8 * all.inner + 4 * (all.empty + all.leaves));
+  }
 }
 
 }  // namespace
