@@ -50,10 +50,12 @@ Result<MhHierarchy> merge_mmh(const MhHierarchy& tree, const MmhMergeOptions& op
 
 // True when merge_mmh(tree) provably merges no block (with any options), so its output encodes to
 // encode_mh(tree)'s bytes: every block but the root is point-like (all its intervals of zero width,
-// or the miss) and no two of them share height, topology and values, compared by a 64-bit hash of
-// all three (equal hashes answer false, never a wrong true). Full-depth trees of open meshes under
-// `anywhere` are mostly such tiles; the check is a summary pass and two bitsets, without the merge's
-// copy, table, renumbering and second encode. False also for a malformed or shared input.
+// or the miss) and no two blocks without branch children have the same mask and values, compared
+// by a 64-bit key (equal keys answer false, never a wrong true; blocks that fit have such children
+// that fit). Full-depth trees of open meshes under `anywhere` are mostly such tiles. One pass over
+// the blocks, a table of recent keys (a tile that merges answers at its first equal neighbours),
+// then the structure checks and two bitsets; no copy, table, renumbering or second encode. False
+// also for a malformed or shared input.
 bool mmh_merge_finds_nothing(const MhHierarchy& tree);
 
 }  // namespace shadowtiles
