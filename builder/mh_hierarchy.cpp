@@ -1,6 +1,7 @@
 #include "builder/mh_hierarchy.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <string>
 
@@ -69,24 +70,23 @@ MhNodeCounts count_stored_nodes(const MhHierarchy& h) {
     return counts;
   }
   counts.inner = 1;
+  // Breadth-first: on the builder's trees (numbered breadth-first) this reads the blocks in order.
   std::vector<uint8_t> seen(h.block_count(), 0);
-  std::vector<uint32_t> stack{h.root_block};
+  std::vector<uint32_t> queue{h.root_block};
+  queue.reserve(h.block_count());
   seen[h.root_block] = 1;
-  while (!stack.empty()) {
-    const uint32_t b = stack.back();
-    stack.pop_back();
+  for (size_t k = 0; k < queue.size(); ++k) {
+    const uint32_t b = queue[k];
     counts.blocks += 1;
-    const uint8_t mask = h.block_mask[b];
-    unsigned r = 0;
-    for (unsigned i = 0; i < 4; ++i) {
-      const unsigned code = F::child_code(mask, i);
-      counts.leaves += code == F::kCodeLeaf;
-      counts.empty += code == F::kCodeEmpty;
-      counts.inner += code == F::kCodeInner;
-      if (!(code & 2u)) continue;
-      const uint32_t c = h.child_block[h.block_first_child[b] + r++];
-      if (!seen[c]) seen[c] = 1, stack.push_back(c);
-    }
+    const unsigned mask = h.block_mask[b];
+    // Per child two bits: low = has a value, high = has children (child_code); counted all at once.
+    const unsigned valued = mask & 0x55u, branching = (mask >> 1) & 0x55u;
+    counts.leaves += unsigned(std::popcount(valued & ~branching));
+    counts.empty += unsigned(std::popcount(branching & ~valued));
+    counts.inner += unsigned(std::popcount(valued & branching));
+    const uint32_t* child = &h.child_block[h.block_first_child[b]];
+    for (unsigned r = 0, end = unsigned(std::popcount(branching)); r < end; ++r)
+      if (!seen[child[r]]) seen[child[r]] = 1, queue.push_back(child[r]);
   }
   return counts;
 }
@@ -97,35 +97,32 @@ Status check_structure(const MhHierarchy& h) {
   const size_t n = h.block_count();
   if (h.block_first_child.size() != n || h.block_first_value.size() != n) return fail("block arrays differ in size");
   if (h.root_mask != 0 && (h.levels == 0 || h.root_block >= n)) return fail("bad root block");
+  // What build_mh and merge_mmh produce (blocks numbered breadth-first): every child has a higher
+  // index than its parent, so there is no cycle, and one pass from the last block both validates
+  // each block and computes its height from its children's, already known. Only the root's needs
+  // checking: a block at depth d below it has height <= root's - d. The depth-first search below
+  // handles any other numbering. On a full-depth tree the check is a few % of a build's CPU (run
+  // once per encoder), so validation and heights share the pass.
   bool children_after_parents = true;
-  for (size_t b = 0; b < n; ++b) {
+  std::vector<uint8_t> fast_height(n, 0);
+  for (size_t b = n; b-- > 0;) {
     const uint8_t m = h.block_mask[b];
     if (m == 0) return fail("block with no children");
     if (uint64_t(h.block_first_child[b]) + F::branch_children(m) > h.child_block.size() ||
         uint64_t(h.block_first_value[b]) + F::valued_children(m) > h.intervals.size())
       return fail("block entries out of range");
+    unsigned hb = 0;
     for (unsigned r = 0; r < F::branch_children(m); ++r) {
       const uint32_t c = h.child_block[h.block_first_child[b] + r];
       if (c >= n) return fail("child block out of range");
       children_after_parents &= c > b;
+      hb = std::max(hb, unsigned(fast_height[c]) + 1);  // final only when every child is after b
     }
+    fast_height[b] = uint8_t(std::min(hb, 255u));  // beyond 255 is too deep for any level count (<= 20)
   }
-  // What build_mh and merge_mmh produce (blocks numbered breadth-first): every child has a higher
-  // index than its parent, so there is no cycle, and one pass from the last block computes every
-  // height. Only the root's needs checking: a block at depth d below it has height <= root's - d.
-  // The depth-first search below handles any other numbering; on a full-depth tree it was 3 % of a
-  // build's CPU, run once per encoder.
   if (children_after_parents) {
     if (h.root_mask == 0) return Status::success();
-    std::vector<uint8_t> height(n, 0);
-    for (size_t b = n; b-- > 0;) {
-      unsigned hb = 0;
-      const uint8_t m = h.block_mask[b];
-      for (unsigned r = 0; r < F::branch_children(m); ++r)
-        hb = std::max(hb, unsigned(height[h.child_block[h.block_first_child[b] + r]]) + 1);
-      height[b] = uint8_t(std::min(hb, 255u));  // beyond 255 is too deep for any level count (<= 20)
-    }
-    if (1 + unsigned(height[h.root_block]) > h.levels) return fail("paths longer than the level count (or a cycle)");
+    if (1 + unsigned(fast_height[h.root_block]) > h.levels) return fail("paths longer than the level count (or a cycle)");
     return Status::success();
   }
   // Heights by memoised depth-first search; a cycle shows up as a path longer than the levels.
