@@ -22,17 +22,16 @@ MhTileSummary summarize(const MhHierarchy& h) { return MhTileSummary{h.root}; }
 
 namespace {
 
-// Depth-first over reachable blocks with a visited mark; recursion depth is bounded by `levels`.
-struct Counter {
+// The expanded tree's size: depth-first over reachable blocks, each block's subtree size memoised
+// (shared blocks count once per reference); recursion depth is bounded by `levels`.
+struct ExpandedSize {
   const MhHierarchy& h;
   std::vector<uint8_t> seen;
   std::vector<uint64_t> tree_nodes;  // per block: nodes of the expanded subtree below it
-  MhNodeCounts counts;
 
   uint64_t visit(uint32_t b) {
     if (seen[b]) return tree_nodes[b];
     seen[b] = 1;
-    counts.blocks += 1;
     const uint8_t mask = h.block_mask[b];
     uint64_t total = 0;
     unsigned r = 0;
@@ -40,9 +39,6 @@ struct Counter {
       const unsigned code = F::child_code(mask, i);
       if (code == 0) continue;
       total += 1;
-      if (code == F::kCodeLeaf) counts.leaves += 1;
-      if (code == F::kCodeEmpty) counts.empty += 1;
-      if (code == F::kCodeInner) counts.inner += 1;
       if (code & 2u) total += visit(h.child_block[h.block_first_child[b] + r++]);
     }
     return tree_nodes[b] = total;
@@ -52,15 +48,10 @@ struct Counter {
 }  // namespace
 
 MhNodeCounts count_nodes(const MhHierarchy& h) {
-  Counter c{h, std::vector<uint8_t>(h.block_count(), 0), std::vector<uint64_t>(h.block_count(), 0), {}};
-  c.counts.tree_nodes = 1;
-  if (h.root_mask != 0) {
-    c.counts.inner = 1;
-    c.counts.tree_nodes += c.visit(h.root_block);
-  } else {
-    c.counts.leaves = 1;
-  }
-  return c.counts;
+  MhNodeCounts counts = count_stored_nodes(h);
+  ExpandedSize expanded{h, std::vector<uint8_t>(h.block_count(), 0), std::vector<uint64_t>(h.block_count(), 0)};
+  counts.tree_nodes = 1 + (h.root_mask != 0 ? expanded.visit(h.root_block) : 0);
+  return counts;
 }
 
 MhNodeCounts count_stored_nodes(const MhHierarchy& h) {

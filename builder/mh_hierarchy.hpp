@@ -43,8 +43,8 @@ struct MhNodeCounts {
   uint64_t tree_nodes = 0;                                // all nodes of the expanded tree
 };
 MhNodeCounts count_nodes(const MhHierarchy& h);
-// count_nodes without tree_nodes (left 0): the stored counts alone, without the expanded tree's
-// per-block memo and recursion (the builder's reference size, per tile and method).
+// count_nodes without tree_nodes (left 0): the stored counts alone, one breadth-first pass without
+// the expanded tree's per-block memo and recursion (the builder's reference size, per tile and method).
 MhNodeCounts count_stored_nodes(const MhHierarchy& h);
 
 // Checks indices, masks and depth (no path longer than `levels`). Errors: invalid_input.
