@@ -25,11 +25,9 @@ Result<EncodedBytes> encode_raw(TileEncodeInput& input) {
 }
 
 Result<EncodedBytes> encode_mh_method(TileEncodeInput& input) {
-  auto mh = input.mh();
-  if (!mh) return mh.error();
-  auto bytes = input.mh_payload();
-  if (!bytes) return bytes.error();
-  return EncodedBytes{**bytes, sbe16a_reference_bytes(**mh)};
+  auto encoded = input.mh_encoded();
+  if (!encoded) return encoded.error();
+  return **encoded;
 }
 
 Result<EncodedBytes> encode_mmh_method(TileEncodeInput& input) {
@@ -38,9 +36,9 @@ Result<EncodedBytes> encode_mmh_method(TileEncodeInput& input) {
   // Where no block can merge (most full-depth tiles of open meshes under `anywhere`), MMH is MH byte
   // for byte: the merge, its renumbering and a second encode would only say so.
   if (mmh_merge_finds_nothing(**mh)) {
-    auto bytes = input.mh_payload();
-    if (!bytes) return bytes.error();
-    return EncodedBytes{**bytes, sbe16a_reference_bytes(**mh)};
+    auto encoded = input.mh_encoded();
+    if (!encoded) return encoded.error();
+    return **encoded;
   }
   auto merged = merge_mmh(**mh);
   if (!merged) return merged.error();
@@ -138,15 +136,15 @@ Result<const MhHierarchy*> TileEncodeInput::mh() {
   return &*mh_;
 }
 
-Result<const std::vector<uint8_t>*> TileEncodeInput::mh_payload() {
-  if (!mh_payload_) {
+Result<const EncodedBytes*> TileEncodeInput::mh_encoded() {
+  if (!mh_encoded_) {
     auto tree = mh();
     if (!tree) return tree.error();
     auto bytes = encode_mh(**tree);
     if (!bytes) return bytes.error();
-    mh_payload_ = std::move(*bytes);
+    mh_encoded_ = EncodedBytes{std::move(*bytes), sbe16a_reference_bytes(**tree)};
   }
-  return &*mh_payload_;
+  return &*mh_encoded_;
 }
 
 const MethodEncoder* find_encoder(store::Method method) {

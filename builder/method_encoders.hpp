@@ -23,6 +23,11 @@ struct TileEncodeOptions {
   uint32_t map_resolution = 0;
 };
 
+struct EncodedBytes {
+  std::vector<uint8_t> payload;
+  uint64_t reference_bytes = 0;  // SBE16a layout size, for the papers' tables (MH family only)
+};
+
 // One tile's input to every encoder. The tile's MH is built once, on first demand, and shared by
 // the methods derived from it (MMH merges it, DAG-MH encodes it).
 class TileEncodeInput {
@@ -38,21 +43,16 @@ class TileEncodeInput {
   // Errors: those of build_mh.
   Result<const MhHierarchy*> mh();
   bool mh_built() const { return mh_.has_value(); }
-  // encode_mh(*mh()), encoded once: MH's payload, and MMH's too where its merge provably finds
-  // nothing (mmh_merge_finds_nothing). Errors: those of mh() and encode_mh.
-  Result<const std::vector<uint8_t>*> mh_payload();
+  // encode_mh(*mh()) and its reference size, made once: MH's encoding, and MMH's too where its
+  // merge provably finds nothing (mmh_merge_finds_nothing). Errors: those of mh() and encode_mh.
+  Result<const EncodedBytes*> mh_encoded();
 
  private:
   const TileIntervals& intervals_;
   const TileEncodeOptions& options_;
   std::optional<TileIntervals> entry_applied_;
   std::optional<MhHierarchy> mh_;
-  std::optional<std::vector<uint8_t>> mh_payload_;
-};
-
-struct EncodedBytes {
-  std::vector<uint8_t> payload;
-  uint64_t reference_bytes = 0;  // SBE16a layout size, for the papers' tables (MH family only)
+  std::optional<EncodedBytes> mh_encoded_;
 };
 
 struct MethodEncoder {

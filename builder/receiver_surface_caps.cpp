@@ -384,6 +384,13 @@ std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord
   cap.assign(size_t(size) * size, std::numeric_limits<float>::infinity());
   std::optional<CappedTexelBlocks> capped;
   if (intervals && intervals->size == size) capped.emplace(*intervals);
+  auto cap_by = [&](const LightSpacePoint& a, const LightSpacePoint& b, const LightSpacePoint& c) {
+    if (capped && !capped->any_near(a, b, c, window)) {
+      if (counts) ++counts->triangles_skipped;
+      return;
+    }
+    lower_caps_by_triangle(a, b, c, window, cap, counts);
+  };
   const Scene& world = scene.scene();
   for (uint32_t t : scene.triangles_of(tile)) {
     const auto& tri = world.triangles[t];
@@ -393,11 +400,7 @@ std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord
     const MeshKind kind = world.meshes[world.triangle_mesh[t]].kind;
     const double nz = (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
     if (kind != MeshKind::open && nz < 0) continue;  // faces the light: an entry surface, the lit side
-    if (capped && !capped->any_near(a, b, c, window)) {
-      if (counts) ++counts->triangles_skipped;
-      continue;
-    }
-    lower_caps_by_triangle(a, b, c, window, cap, counts);
+    cap_by(a, b, c);
   }
   // A patch over a nearly closed mesh's hole bounds its solid like the mesh's own faces: receivers lie
   // below those not facing the light (docs/receiver-contracts.md, "Nearly closed solids").
@@ -408,11 +411,7 @@ std::vector<float> receiver_surface_caps(const LightSpaceScene& scene, TileCoord
     const LightSpacePoint& c = scene.vertex(tri[2]);
     const double nz = (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
     if (nz < 0) continue;
-    if (capped && !capped->any_near(a, b, c, window)) {
-      if (counts) ++counts->triangles_skipped;
-      continue;
-    }
-    lower_caps_by_triangle(a, b, c, window, cap, counts);
+    cap_by(a, b, c);
   }
   return cap;
 }
