@@ -14,6 +14,7 @@
 #include "builder/mh_builder.hpp"
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
+#include "bench/lossless_guard.hpp"
 #include "bench/synthetic_tile_cache.hpp"
 #include "builder/mmh_merger.hpp"
 #include "codec/dagmh_decoder.hpp"
@@ -38,13 +39,18 @@ const Encoded& encoded(int kind, uint32_t size, int method) {
   auto& slot = cache[{kind, size, method}];
   if (!slot) {
     slot = std::make_unique<Encoded>();
-    auto tree = *st::build_mh(st::make_synthetic_tile(kSyntheticKinds[kind], size, 42));
+    const st::TileIntervals& tile = st::bench::cached_synthetic_tile(kind, size);
+    auto tree = *st::build_mh(tile);
     if (method == 2) {
       slot->bytes = *st::encode_dagmh(tree);
       slot->dag = *st::DagMhTileView::parse(slot->bytes);
+      st::bench::require_lookups_inside(tile, [&](uint32_t u, uint32_t v) { return slot->dag.lookup(u, v); },
+                                        "bench_dagmh DAG-MH");
     } else {
       slot->bytes = *st::encode_mh(method == 1 ? *st::merge_mmh(tree) : tree);
       slot->mh = *st::MhTileView::parse(slot->bytes);
+      st::bench::require_lookups_inside(tile, [&](uint32_t u, uint32_t v) { return slot->mh.lookup(u, v); },
+                                        method == 1 ? "bench_dagmh MMH" : "bench_dagmh MH");
     }
   }
   return *slot;

@@ -11,6 +11,7 @@
 #include "builder/mh_encoder.hpp"
 #include "builder/mh_synthetic.hpp"
 #include "bench/lookup_modes.hpp"
+#include "bench/lossless_guard.hpp"
 #include "bench/synthetic_tile_cache.hpp"
 #include "builder/mmh_merger.hpp"
 #include "codec/mh_decoder.hpp"
@@ -36,6 +37,8 @@ const Encoded& encoded(int kind, uint32_t size, bool merged) {
     auto tree = *st::build_mh(tile(kind, size));
     slot->bytes = *st::encode_mh(merged ? *st::merge_mmh(tree) : tree);
     slot->view = *st::MhTileView::parse(slot->bytes);
+    st::bench::require_lookups_inside(tile(kind, size), [&](uint32_t u, uint32_t v) { return slot->view.lookup(u, v); },
+                                      merged ? "bench_mh MMH" : "bench_mh MH");
   }
   return *slot;
 }
