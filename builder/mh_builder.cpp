@@ -7,6 +7,7 @@
 
 #include "builder/mh_dense_levels.hpp"
 #include "builder/mh_top_down.hpp"
+#include "common/isa_clones.hpp"
 
 namespace shadowtiles {
 
@@ -59,7 +60,7 @@ namespace {
 // `bad` is set when a texel's interval or entry bound is invalid (check_tile_intervals' rule, tested
 // as the bottom level reads the texels: a separate pass over them was 2 % of an oahu 16384² build);
 // the tree is then to be discarded.
-MhHierarchy build_bottom_up(const TileIntervals& tile, bool& bad) {
+SHADOWTILES_ISA_CLONES MhHierarchy build_bottom_up(const TileIntervals& tile, bool& bad) {
   const unsigned L = unsigned(std::countr_zero(tile.size));
   MhDenseLevels dense;
   dense.size = tile.size;
