@@ -4,7 +4,9 @@
 // x86-64. Used where it measured a gain: DAG-MH point and PCF lookups and batch walks (popcounts
 // and variable shifts on every step): +5-8% point rows, +9-11% PCF 3x3 on fzk_haus (docs/client.md);
 // the DAG-MH encoder's grid search (an fma per multiplier: one instruction instead of a libm call;
-// docs/build-time.md). MH and CPVS lookups gained nothing.
+// docs/build-time.md); build_mh's bottom-up pass (the `surfaces` encoders' thread-s -17 to -28 %,
+// docs/build-time.md, session 44). MH and CPVS lookups gained nothing, nor did the entry rule, the
+// second-layer cap pass or the MMH merge and MH encoder on full-depth trees (session 44).
 // GCC only (clang 14's clones are young; the fuzz build is clang). Off with SHADOWTILES_NO_ISA_CLONES
 // (the sanitized build sets it, so it checks the baseline copies).
 #pragma once
