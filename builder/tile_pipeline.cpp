@@ -22,6 +22,11 @@ namespace shadowtiles {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// The store commits without a sync (one forced sync ends the build, builder/build_job.cpp). This
+// many bytes of committed blobs, flushed from the pipeline's otherwise idle thread while the workers
+// run, leave that last sync little to write.
+constexpr uint64_t kSyncEveryBytes = uint64_t(256) << 20;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 // CPU time of the calling thread: a tile's cost that the machine's load does not inflate.
@@ -138,6 +143,7 @@ Result<TilePipelineResult> run_tile_pipeline(const TilePipelineInput& input, con
   auto start = Clock::now();
   std::atomic<size_t> next{0};
   std::atomic<uint64_t> committed{0};
+  std::atomic<uint64_t> committed_bytes{0};
   std::atomic<uint64_t> rays_done{0};
   std::atomic<bool> failed{false};
   std::mutex result_mutex;
@@ -173,6 +179,7 @@ Result<TilePipelineResult> run_tile_pipeline(const TilePipelineInput& input, con
         break;
       }
       mine.store_seconds += seconds_since(store_start);
+      committed_bytes += outcome.blob_bytes;
       const DualDepthStats& depth = outcome.depth;
       TileCost cost{tile, thread_cpu_seconds() - cpu_start, seconds_since(wall_start), depth.hits,
                     outcome.blob_bytes};
@@ -199,14 +206,19 @@ Result<TilePipelineResult> run_tile_pipeline(const TilePipelineInput& input, con
   result.threads = std::min<unsigned>(input.threads, std::max<size_t>(todo.size(), 1));
   for (unsigned t = 0; t < result.threads; ++t) threads.emplace_back(worker);
 
-  // Progress line about once a second while the workers run.
+  // Progress line about once a second while the workers run, and the committed tiles flushed.
   auto last_report = Clock::now();
+  uint64_t synced_bytes = 0;
   for (;;) {
     {
       std::unique_lock lock(result_mutex);
       if (workers_finished.wait_for(lock, std::chrono::milliseconds(50),
                                     [&] { return workers_done == result.threads; }))
         break;
+    }
+    if (const uint64_t bytes = committed_bytes; bytes - synced_bytes >= kSyncEveryBytes && !failed) {
+      synced_bytes = bytes;
+      if (Status s = db.sync(); !s) fail(s.error());
     }
     if (input.on_progress && seconds_since(last_report) >= 1.0) {
       last_report = Clock::now();

@@ -432,7 +432,11 @@ Status Store::clear(Database db) {
 
 Status Store::sync() {
   if (mode_ == Mode::read_only) return Status::success();
+  // Shared, as a transaction: the sync reads the current meta page from the map, which a growth
+  // (exclusive) may remap. Writers may commit meanwhile (the build syncs while its workers write).
+  gate_.enter_shared();
   const int rc = mdb_env_sync(env_, 1);
+  gate_.leave_shared();
   if (rc != MDB_SUCCESS) return lmdb_error("mdb_env_sync", rc);
   return Status::success();
 }

@@ -474,6 +474,46 @@ TEST(LmdbStore, ConcurrentWritersAndReaders) {
   }
 }
 
+// The build flushes committed tiles from one thread while its workers write (builder/tile_pipeline.cpp):
+// sync() from another thread, while writes grow the map (a remap), loses and breaks nothing.
+TEST(LmdbStore, SyncWhileWritersGrowTheMap) {
+  TempDir dir;
+  Store::Options options = rw_options();
+  options.initial_map_size = 64 << 10;  // many growths during the writes
+  options.no_sync = true;
+  auto store = open_or_die(dir.path(), options);
+  ASSERT_TRUE(store);
+  constexpr uint32_t kPerWriter = 400;
+  std::atomic<bool> writers_done{false};
+  std::atomic<int> failures{0};
+  std::atomic<uint64_t> syncs{0};
+  auto writer = [&](uint8_t level) {
+    for (uint32_t i = 0; i < kPerWriter; ++i) {
+      std::vector<Store::Put> puts = {
+          {Database::tiles, tile_key(level, i, 0), value_for(level * 100000u + i, 4000 + 7 * i)}};
+      if (!store->write(puts).ok()) ++failures;
+    }
+  };
+  std::thread syncer([&] {
+    while (!writers_done.load()) {
+      if (!store->sync().ok()) ++failures;
+      ++syncs;
+    }
+  });
+  std::thread w1(writer, 1), w2(writer, 2);
+  w1.join();
+  w2.join();
+  writers_done = true;
+  syncer.join();
+  EXPECT_EQ(failures.load(), 0);
+  EXPECT_GT(syncs.load(), 0u);
+  EXPECT_GE(store->map_size(), uint64_t{4} << 20);
+  for (uint8_t level : {1, 2})
+    for (uint32_t i = 0; i < kPerWriter; ++i)
+      EXPECT_EQ(get_or_die(*store, Database::tiles, tile_key(level, i, 0)),
+                value_for(level * 100000u + i, 4000 + 7 * i));
+}
+
 // Another process grows the map while this one has the store open read-only: the reader must adopt
 // the new size (MDB_MAP_RESIZED) instead of failing.
 TEST(LmdbStore, ReaderFollowsMapGrownByAnotherProcess) {
