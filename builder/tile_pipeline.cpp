@@ -27,6 +27,7 @@ using Clock = std::chrono::steady_clock;
 // many bytes of committed blobs, flushed from the pipeline's otherwise idle thread while the workers
 // run, leave that last sync little to write.
 constexpr uint64_t kSyncEveryBytes = uint64_t(256) << 20;
+
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 // CPU time of the calling thread: a tile's cost that the machine's load does not inflate.
