@@ -421,6 +421,22 @@ TEST(LmdbStore, CompactCopyHasSameContents) {
   EXPECT_EQ(*copy->entry_count(Database::tiles), 100u);
 }
 
+// The concurrency tests' data: value i of writer `level` (sizes vary, so pages fill unevenly),
+// written one transaction each.
+Bytes numbered_value(uint8_t level, uint32_t i) { return value_for(level * 100000u + i, 2000 + i); }
+int write_numbered(Store& store, uint8_t level, uint32_t count) {  // returns the failed writes
+  int failures = 0;
+  for (uint32_t i = 0; i < count; ++i) {
+    std::vector<Store::Put> puts = {{Database::tiles, tile_key(level, i, 0), numbered_value(level, i)}};
+    if (!store.write(puts).ok()) ++failures;
+  }
+  return failures;
+}
+void expect_numbered(const Store& store, uint8_t level, uint32_t count) {
+  for (uint32_t i = 0; i < count; ++i)
+    EXPECT_EQ(get_or_die(store, Database::tiles, tile_key(level, i, 0)), numbered_value(level, i));
+}
+
 TEST(LmdbStore, ConcurrentWritersAndReaders) {
   TempDir dir;
   Store::Options options = rw_options();
@@ -432,13 +448,7 @@ TEST(LmdbStore, ConcurrentWritersAndReaders) {
   std::atomic<bool> writers_done{false};
   std::atomic<int> failures{0};
 
-  auto writer = [&](uint8_t level) {
-    for (uint32_t i = 0; i < kPerWriter; ++i) {
-      std::vector<Store::Put> puts = {
-          {Database::tiles, tile_key(level, i, 0), value_for(level * 100000u + i, 2000 + i)}};
-      if (!store->write(puts).ok()) ++failures;
-    }
-  };
+  auto writer = [&](uint8_t level) { failures += write_numbered(*store, level, kPerWriter); };
   auto reader = [&](uint64_t seed) {
     std::mt19937_64 rng(seed);
     while (!writers_done.load()) {
@@ -447,7 +457,7 @@ TEST(LmdbStore, ConcurrentWritersAndReaders) {
       auto value = store->get(Database::tiles, tile_key(level, i, 0));
       if (!value.ok()) { ++failures; continue; }
       // A value, when present, is never torn.
-      if (*value && **value != value_for(level * 100000u + i, 2000 + i)) ++failures;
+      if (*value && **value != numbered_value(level, i)) ++failures;
       auto snapshot = store->snapshot();
       if (!snapshot.ok()) { ++failures; continue; }
       size_t count = 0;
@@ -466,12 +476,7 @@ TEST(LmdbStore, ConcurrentWritersAndReaders) {
   r2.join();
   EXPECT_EQ(failures.load(), 0);
   EXPECT_GT(store->map_size(), options.initial_map_size);
-  for (uint8_t level : {1, 2}) {
-    for (uint32_t i = 0; i < kPerWriter; ++i) {
-      EXPECT_EQ(get_or_die(*store, Database::tiles, tile_key(level, i, 0)),
-                value_for(level * 100000u + i, 2000 + i));
-    }
-  }
+  for (uint8_t level : {1, 2}) expect_numbered(*store, level, kPerWriter);
 }
 
 // The build flushes committed tiles from one thread while its workers write (builder/tile_pipeline.cpp):
@@ -483,17 +488,11 @@ TEST(LmdbStore, SyncWhileWritersGrowTheMap) {
   options.no_sync = true;
   auto store = open_or_die(dir.path(), options);
   ASSERT_TRUE(store);
-  constexpr uint32_t kPerWriter = 400;
+  constexpr uint32_t kPerWriter = 800;
   std::atomic<bool> writers_done{false};
   std::atomic<int> failures{0};
   std::atomic<uint64_t> syncs{0};
-  auto writer = [&](uint8_t level) {
-    for (uint32_t i = 0; i < kPerWriter; ++i) {
-      std::vector<Store::Put> puts = {
-          {Database::tiles, tile_key(level, i, 0), value_for(level * 100000u + i, 4000 + 7 * i)}};
-      if (!store->write(puts).ok()) ++failures;
-    }
-  };
+  auto writer = [&](uint8_t level) { failures += write_numbered(*store, level, kPerWriter); };
   std::thread syncer([&] {
     while (!writers_done.load()) {
       if (!store->sync().ok()) ++failures;
@@ -508,10 +507,7 @@ TEST(LmdbStore, SyncWhileWritersGrowTheMap) {
   EXPECT_EQ(failures.load(), 0);
   EXPECT_GT(syncs.load(), 0u);
   EXPECT_GE(store->map_size(), uint64_t{4} << 20);
-  for (uint8_t level : {1, 2})
-    for (uint32_t i = 0; i < kPerWriter; ++i)
-      EXPECT_EQ(get_or_die(*store, Database::tiles, tile_key(level, i, 0)),
-                value_for(level * 100000u + i, 4000 + 7 * i));
+  for (uint8_t level : {1, 2}) expect_numbered(*store, level, kPerWriter);
 }
 
 // Another process grows the map while this one has the store open read-only: the reader must adopt
