@@ -176,26 +176,36 @@ NearlyClosedReport close_nearly_closed_meshes(Scene& scene, const NearlyClosedOp
       // The patch's part at both points of every sample: a tree too (a long boundary's patch has up
       // to max_patch_triangles triangles, x max_samples x 2 points).
       const WindingNumberTree patch_tree(scene.vertices, patch.triangles);
+      // Both points of every sample and their w_patch, on every build thread; then, in sample order,
+      // what they say (so the sums and the full points are the same for any thread count).
+      std::vector<std::array<Vec3, 2>> points(samples.size());
+      std::vector<std::array<double, 2>> w_patch(samples.size());
+      parallel_for_ranges(options.threads, samples.size(), [&](size_t begin, size_t end) {
+        for (size_t s = begin; s < end; ++s) {
+          const auto& t = triangles[samples[s].first];
+          const Vec3 &a = scene.vertices[t[0]], &b = scene.vertices[t[1]], &c = scene.vertices[t[2]];
+          const Vec3 n = cross(sub(b, a), sub(c, a));
+          const double length = norm(n);
+          // Offset: a hundredth of the triangle's size, along the unit normal, both sides.
+          const double eps = 0.01 * std::sqrt(0.5 * length);
+          for (int side = 0; side < 2; ++side) {
+            const double sign = side == 0 ? 1.0 : -1.0;
+            Vec3& p = points[s][side];
+            for (int k = 0; k < 3; ++k) p[k] = (a[k] + b[k] + c[k]) / 3 + sign * eps * n[k] / length;
+            w_patch[s][side] = patch_tree(p);
+          }
+        }
+      });
       for (size_t s = 0; s < samples.size(); ++s) {
-        const auto& [i, weight] = samples[s];
-        const auto& t = triangles[i];
-        const Vec3 &a = scene.vertices[t[0]], &b = scene.vertices[t[1]], &c = scene.vertices[t[2]];
-        const Vec3 n = cross(sub(b, a), sub(c, a));
-        const double length = norm(n);
-        // Offset: a hundredth of the triangle's size, along the unit normal, both sides.
-        const double eps = 0.01 * std::sqrt(0.5 * length);
         const bool full = next_full < full_count && s >= size_t(double(next_full) * full_stride);
         if (full) ++next_full;
         double deviation = 0;
-        for (double side : {1.0, -1.0}) {
-          Vec3 p{};
-          for (int k = 0; k < 3; ++k) p[k] = (a[k] + b[k] + c[k]) / 3 + side * eps * n[k] / length;
-          const double w_patch = patch_tree(p);
-          deviation = std::max(deviation, std::fabs(w_patch));
-          if (full) full_points.push_back({s, side > 0, p, w_patch});
+        for (int side = 0; side < 2; ++side) {
+          deviation = std::max(deviation, std::fabs(w_patch[s][side]));
+          if (full) full_points.push_back({s, side == 0, points[s][side], w_patch[s][side]});
         }
         r.max_deviation = std::max(r.max_deviation, deviation);
-        if (deviation > options.tolerance) r.ambiguous_area += weight;
+        if (deviation > options.tolerance) r.ambiguous_area += samples[s].second;
       }
       // The mesh's part at every full point: hierarchically (winding_number_tree.hpp; the brute-force
       // sum of samples x triangles solid angles was most of a large scan's load time), on every build

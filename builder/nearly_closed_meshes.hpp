@@ -65,7 +65,8 @@ struct NearlyClosedOptions {
   // budget as max_ambiguous_area: dragon_res2's folds and inner sheets are 0.8 % (4 of 512 samples);
   // the fzk_haus meshes refused for faces between touching parts are 2.6-88 %. 0 refuses any.
   double max_misplaced_area = 0.01;
-  // Threads for the whole winding numbers (not a test parameter: the result is the same for any count).
+  // Threads for the winding numbers at the samples (not a test parameter: the result is the same for
+  // any count).
   unsigned threads = 1;
 };
 

@@ -259,6 +259,8 @@ TEST(NearlyClosed, ThreadsDoNotChangeTheTest) {
     EXPECT_EQ(a.misplaced_samples, b.misplaced_samples);
     EXPECT_EQ(a.misplaced_area, b.misplaced_area);
     EXPECT_EQ(a.max_deviation, b.max_deviation);
+    EXPECT_EQ(a.ambiguous_area, b.ambiguous_area);
+    EXPECT_EQ(a.patched_volume, b.patched_volume);
   }
 }
 
