@@ -437,11 +437,18 @@ void expect_numbered(const Store& store, uint8_t level, uint32_t count) {
     EXPECT_EQ(get_or_die(store, Database::tiles, tile_key(level, i, 0)), numbered_value(level, i));
 }
 
+// The concurrency tests' store: a small first map, so the writes grow it while the other threads
+// run, and no sync per commit.
+Store::Options growing_options(uint64_t initial_map_size) {
+  Store::Options options = rw_options();
+  options.initial_map_size = initial_map_size;
+  options.no_sync = true;
+  return options;
+}
+
 TEST(LmdbStore, ConcurrentWritersAndReaders) {
   TempDir dir;
-  Store::Options options = rw_options();
-  options.initial_map_size = 256 << 10;  // so growth happens while readers run
-  options.no_sync = true;
+  const Store::Options options = growing_options(256 << 10);  // growth while readers run
   auto store = open_or_die(dir.path(), options);
   ASSERT_TRUE(store);
   constexpr uint32_t kPerWriter = 300;
@@ -483,10 +490,7 @@ TEST(LmdbStore, ConcurrentWritersAndReaders) {
 // sync() from another thread, while writes grow the map (a remap), loses and breaks nothing.
 TEST(LmdbStore, SyncWhileWritersGrowTheMap) {
   TempDir dir;
-  Store::Options options = rw_options();
-  options.initial_map_size = 64 << 10;  // many growths during the writes
-  options.no_sync = true;
-  auto store = open_or_die(dir.path(), options);
+  auto store = open_or_die(dir.path(), growing_options(64 << 10));  // many growths during the writes
   ASSERT_TRUE(store);
   constexpr uint32_t kPerWriter = 800;
   std::atomic<bool> writers_done{false};
